@@ -1,0 +1,62 @@
+// Bounding-volume hierarchy over the triangles of one mesh (axis-aligned boxes, in the mesh's
+// own frame). Built once with the model; queries never allocate: they report into a
+// caller-provided collector.
+#pragma once
+
+#include "sulcus/engine/mesh.h"
+#include "sulcus/engine/types.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace sulcus {
+
+class Bvh {
+public:
+    struct Node {
+        Aabb box;
+        uint32_t first = 0;  // leaf: first index into order(); inner: index of the left child
+        uint32_t count = 0;  // leaf: number of triangles (> 0); inner: 0 (right child = left + 1)
+    };
+
+    Bvh() = default;
+    explicit Bvh(const TriMesh& mesh, int max_leaf_size = 4);
+
+    // Calls visit(triangle_index) for every triangle whose box overlaps `query`. Stops early and
+    // returns false when visit returns false. Allocation-free (fixed-depth stack).
+    template <class Visit>
+    bool query(const Aabb& query, Visit&& visit) const;
+
+    const std::vector<Node>& nodes() const { return nodes_; }
+    const std::vector<uint32_t>& order() const { return order_; }
+    int depth() const { return depth_; }
+
+private:
+    std::vector<Node> nodes_;
+    std::vector<uint32_t> order_;  // triangle indices, grouped by leaf
+    int depth_ = 0;
+};
+
+inline constexpr int kBvhMaxDepth = 64;
+
+template <class Visit>
+bool Bvh::query(const Aabb& q, Visit&& visit) const {
+    if (nodes_.empty()) return true;
+    uint32_t stack[kBvhMaxDepth + 2];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        const Node& n = nodes_[stack[--top]];
+        if (!n.box.overlaps(q)) continue;
+        if (n.count > 0) {
+            for (uint32_t i = 0; i < n.count; ++i)
+                if (!visit(order_[n.first + i])) return false;
+        } else {
+            stack[top++] = n.first + 1;
+            stack[top++] = n.first;
+        }
+    }
+    return true;
+}
+
+}  // namespace sulcus

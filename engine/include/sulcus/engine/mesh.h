@@ -1,0 +1,77 @@
+// Triangle meshes: loading, validation, adjacency and the convex/concave classification of
+// every edge and vertex (the classification of Table 1 of the seed paper, derived from the mesh
+// instead of a hand-made lookup table).
+#pragma once
+
+#include "sulcus/engine/types.h"
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace sulcus {
+
+// A closed, consistently oriented triangle mesh; triangles wind counter-clockwise seen from
+// outside, so the right-hand normal points out of the solid. Coordinates in metres.
+struct TriMesh {
+    std::vector<Vec3> vertices;
+    std::vector<std::array<uint32_t, 3>> triangles;
+};
+
+enum class Convexity : uint8_t {
+    Flat,     // dihedral within the flatness tolerance of 180 degrees
+    Convex,   // the solid is locally convex here (free space is locally non-convex)
+    Concave,  // the solid is locally concave here (free space is locally convex)
+    Mixed,    // vertices only: both convex and concave edges meet here (saddle)
+};
+
+// One undirected edge of a closed manifold mesh with its two triangles.
+struct MeshEdge {
+    std::array<uint32_t, 2> v;     // v[0] < v[1]
+    std::array<uint32_t, 2> tri;   // tri[0]: the triangle in which the edge runs v[0] -> v[1]
+    Convexity convexity = Convexity::Flat;
+    double dihedral = 0.0;         // signed bend angle in radians: > 0 convex, < 0 concave, 0 flat
+};
+
+// Adjacency derived from a validated TriMesh.
+struct MeshTopology {
+    std::vector<MeshEdge> edges;
+    std::vector<std::array<uint32_t, 3>> triangle_edges;   // edge index of (v0v1, v1v2, v2v0)
+    std::vector<std::array<uint32_t, 3>> triangle_neighbours;  // triangle across each of those edges
+    std::vector<Vec3> triangle_normals;                    // unit outward normals
+    // Triangles and edges around each vertex (CSR layout: offsets has vertices+1 entries).
+    std::vector<uint32_t> vertex_triangle_offsets, vertex_triangles;
+    std::vector<uint32_t> vertex_edge_offsets, vertex_edges;
+    std::vector<Convexity> vertex_convexity;
+};
+
+// Bend angle below which an edge counts as flat, in radians.
+inline constexpr double kFlatEdgeAngle = 1e-9;
+
+struct MeshLoad {
+    TriMesh mesh;
+    std::string error;  // empty on success; else one line "path: place: what is wrong"
+    bool ok() const { return error.empty(); }
+};
+
+// Reads OBJ, STL, PLY, OFF (OpenMesh) and glTF/GLB (tinygltf), merges coincident vertices of
+// per-face formats, and validates. On failure the error names the file and the first fault.
+MeshLoad load_mesh(const std::string& path);
+
+// Checks that a mesh is usable as a solid: finite coordinates, indices in range, no degenerate
+// or duplicate triangles, every edge shared by exactly two triangles with opposite directions
+// (closed, manifold, consistently oriented), manifold vertices, positive enclosed volume
+// (outward orientation). Returns "" or a one-line description of the first fault
+// (without the file name).
+std::string validate_mesh(const TriMesh& mesh);
+
+// Builds the adjacency of a mesh that passed validate_mesh.
+MeshTopology build_topology(const TriMesh& mesh);
+
+// Signed volume enclosed by the mesh in cubic metres (> 0 for outward orientation).
+double mesh_volume(const TriMesh& mesh);
+
+// Writes a mesh as Wavefront OBJ (used by content generators and tests).
+bool write_obj(const TriMesh& mesh, const std::string& path, std::string* error);
+
+}  // namespace sulcus

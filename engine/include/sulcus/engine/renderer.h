@@ -1,0 +1,162 @@
+// The configuration-based 6-DOF haptic renderer (seed paper, sections II-IV).
+//
+// An immutable Model (tool and objects with their adjacency and BVHs, settings) and a small
+// copyable State (graphic-tool pose, active contacts, solver warm start). One call to step() is
+// one servo tick: given the haptic tool's pose it finds the graphic tool's pose as the solution
+// of the constrained optimization of eq. 1-5, and the force and torque of eq. 4.
+#pragma once
+
+#include "sulcus/engine/bvh.h"
+#include "sulcus/engine/mesh.h"
+#include "sulcus/engine/qp.h"
+#include "sulcus/engine/scene_file.h"
+#include "sulcus/engine/types.h"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace sulcus {
+
+struct RendererSettings {
+    HapticSettings haptic;
+    // Largest violation of an exact (non-linearized) constraint accepted at the solution, in
+    // metres. The step re-linearizes until every constraint is within it.
+    double constraint_tol_m = 1e-7;
+    // Re-linearizations of the constraints per QP candidate before the step gives up on it.
+    int max_relinearizations = 12;
+    // Candidate principal-contact sets solved in parallel per step (the default set included).
+    int max_candidates = 8;
+    // Two separating directions whose separations differ by less than this (metres) are taken as
+    // tied: both become candidates.
+    double tie_tol_m = 1e-6;
+    // Distance under which the tool and an object count as touching (for contact statistics).
+    double contact_distance_m = 1e-6;
+    qp::Settings qp;
+};
+
+// One rigid object of the scene with everything derived from its mesh.
+struct ModelObject {
+    std::string name;
+    Pose pose;                 // local -> world
+    TriMesh mesh;              // placed in the world (vertices already transformed)
+    MeshTopology topology;
+    Bvh bvh;                   // over the world-placed mesh
+};
+
+// The tool: a closed convex triangle mesh in its own frame, with its features.
+struct ModelTool {
+    TriMesh mesh;
+    MeshTopology topology;
+    // Distinct face planes of the convex hull (coplanar triangles merged): unit normal and offset
+    // (n . x = d on the plane, n . x <= d inside), local frame.
+    std::vector<Vec3> face_normals;
+    std::vector<double> face_offsets;
+    // Edges that are not flat (real edges of the convex polytope): vertex pairs.
+    std::vector<std::array<uint32_t, 2>> edges;
+    double radius_m = 0.0;  // largest distance from the local origin to a vertex
+};
+
+struct Model {
+    RendererSettings settings;
+    ModelTool tool;
+    std::vector<ModelObject> objects;
+};
+
+struct ModelBuild {
+    std::unique_ptr<Model> model;
+    std::string error;  // one line when the model cannot be built (e.g. the tool is not convex)
+};
+
+ModelBuild build_model(const TriMesh& tool, const std::vector<SceneObject>& objects,
+                       const RendererSettings& settings);
+
+// Kinds of linearized constraint atoms (seed paper eq. 6 and 7).
+enum class AtomKind : uint8_t {
+    VertexFace,  // tool vertex against an object face plane (V-F, eq. 6)
+    FaceVertex,  // object vertex against a tool face plane (F-V)
+    EdgeEdge,    // tool edge against an object edge on the dynamic plane of eq. 7 (E-E)
+    FixedAxis,   // tool vertex against a plane frozen for the step (fallback separating axis)
+};
+
+// A principal-contact constraint atom: one linearizable inequality g(q) >= 0 that can be
+// re-evaluated exactly at any tool pose. Combination and degenerate principal contacts of
+// Table 1 are sets of atoms.
+struct Atom {
+    AtomKind kind = AtomKind::VertexFace;
+    uint16_t object = 0;
+    uint32_t tool_vertex = 0;      // VF: the tool vertex
+    uint32_t tool_face = 0;        // FV: tool face plane (ModelTool::face_normals)
+    uint32_t tool_edge = 0;        // EE: tool edge (ModelTool::edges)
+    uint32_t object_triangle = 0;  // VF: the constraining face
+    uint32_t object_vertex = 0;    // FV: the object vertex
+    uint32_t object_edge = 0;      // EE: object edge (MeshTopology::edges)
+    double sign = 1.0;             // VF, EE: orientation of the normal, fixed once per step
+    Vec3 axis{0.0};                // FixedAxis: unit normal (world); object_vertex is on the plane
+
+    bool same_as(const Atom& o) const {
+        return kind == o.kind && object == o.object && tool_vertex == o.tool_vertex && tool_face == o.tool_face &&
+               tool_edge == o.tool_edge && object_triangle == o.object_triangle &&
+               object_vertex == o.object_vertex && object_edge == o.object_edge && sign == o.sign;
+    }
+};
+
+inline constexpr int kMaxActiveAtoms = 32;
+
+enum class StepStatus : uint8_t {
+    Free,     // no constraint active: the graphic tool is at the haptic pose
+    Contact,  // constrained: the graphic tool touches an object
+    Partial,  // the haptic motion of this tick was too large to take whole; moved part way
+    Held,     // no safe answer this tick: the last safe pose is kept
+    BadInput, // the haptic pose was not finite or not a unit quaternion: last pose kept
+};
+inline constexpr int kStepStatusCount = 5;
+const char* to_string(StepStatus s);
+
+struct StageTimes {
+    double detect_us = 0, gather_us = 0, solve_us = 0, select_us = 0, force_us = 0;
+};
+
+struct StepStats {
+    StageTimes times;
+    int triangles_near = 0;     // triangles within reach of this tick's motion (detect)
+    int pairs_in_contact = 0;   // tool-triangle pairs whose separation is within reach
+    int candidates = 0;         // candidate principal-contact sets solved (gather/solve)
+    int atoms = 0;              // constraint atoms in the chosen candidate
+    int qp_solves = 0;
+    int qp_iterations = 0;
+    int relinearizations = 0;   // of the chosen candidate
+    double constraint_error_m = 0.0;  // largest exact violation at the chosen pose (<= tol)
+    int active_vf = 0, active_fv = 0, active_ee = 0;  // active atoms by kind
+    int regions = 0;            // contact regions (connected groups of touching triangles)
+};
+
+struct StepResult {
+    Pose graphic;
+    Vec3 force_N{0.0};
+    Vec3 torque_Nm{0.0};
+    StepStatus status = StepStatus::Free;
+    int contacts = 0;  // active constraint atoms
+    StepStats stats;
+};
+
+struct State {
+    Pose graphic;
+    bool initialized = false;
+    int active_count = 0;
+    Atom active[kMaxActiveAtoms];
+    Pose last_haptic;
+};
+
+// Starts a state with the graphic tool at `pose` (which must not penetrate).
+State make_state(const Pose& pose);
+
+// One servo tick. Deterministic; no heap allocation, lock or I/O after the first call on a thread.
+StepResult step(const Model& model, State& state, const Pose& haptic_pose);
+
+// The 6-vector of eq. 4 in world frame: force K_t (p_g - p_h), torque K_r log(R_g R_h^-1).
+void compute_wrench(const HapticSettings& h, const Pose& graphic, const Pose& haptic, Vec3& force_N,
+                    Vec3& torque_Nm);
+
+}  // namespace sulcus

@@ -1,0 +1,63 @@
+#include "ccd.h"
+
+#include "geometry.h"
+#include "so3.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sulcus {
+
+CcdResult conservative_advancement(const Model& model, const Pose& base, const double x[6], double clearance,
+                                   const NearTriangle* near, int near_count, int max_iterations,
+                                   const CcdScratch& scratch) {
+    CcdResult r;
+    const Vec3 dp(x[0], x[1], x[2]);
+    const Vec3 th(x[3], x[4], x[5]);
+    const double speed = glm::length(dp) + glm::length(th) * model.tool.radius_m;
+    const ModelTool& tool = model.tool;
+    ConvexView view;
+    view.vertices = scratch.vertices;
+    view.vertex_count = static_cast<int>(tool.mesh.vertices.size());
+    view.normals = scratch.normals;
+    view.offsets = scratch.offsets;
+    view.face_count = static_cast<int>(tool.face_normals.size());
+    view.edges = reinterpret_cast<const uint32_t (*)[2]>(tool.edges.data());
+    view.edge_count = static_cast<int>(tool.edges.size());
+    const auto* tris = reinterpret_cast<const uint32_t (*)[3]>(tool.mesh.triangles.data());
+    const int tri_count = static_cast<int>(tool.mesh.triangles.size());
+    double tau = 0.0;
+    for (int it = 0; it < max_iterations; ++it) {
+        r.iterations = it + 1;
+        const Quat q = glm::normalize(quat_exp(tau * th) * base.orientation);
+        const Vec3 p = base.position + tau * dp;
+        for (int i = 0; i < view.vertex_count; ++i) scratch.vertices[i] = q * tool.mesh.vertices[i] + p;
+        for (int f = 0; f < view.face_count; ++f) {
+            scratch.normals[f] = q * tool.face_normals[f];
+            scratch.offsets[f] = tool.face_offsets[f] + glm::dot(scratch.normals[f], p);
+        }
+        double d = 1e300;
+        for (int i = 0; i < near_count; ++i) {
+            const ModelObject& obj = model.objects[near[i].object];
+            const auto& t = obj.mesh.triangles[near[i].tri];
+            d = std::min(d, distance_convex_triangle(view, tris, tri_count, obj.mesh.vertices[t[0]],
+                                                     obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]));
+            if (d <= clearance) {
+                r.hit = true;
+                r.toi = tau;
+                return r;
+            }
+        }
+        if (tau >= 1.0 || speed <= 0.0) {
+            r.toi = 1.0;
+            return r;
+        }
+        tau = std::min(1.0, tau + (d - clearance) / speed);
+    }
+    r.hit = true;
+    r.exhausted = true;
+    r.toi = tau;
+    return r;
+}
+
+}  // namespace sulcus

@@ -1,0 +1,34 @@
+// Continuous collision detection for the tool's free motion by conservative advancement: the tool
+// moves from `base` along x (translation x[0..2], world rotation vector x[3..5], both linear in
+// the motion parameter tau in [0,1]); no point of the tool moves faster than
+// |x_p| + |x_theta| * radius per unit tau, so advancing tau by (distance - clearance) / speed can
+// never step over a contact, however thin the wall or fast the motion.
+#pragma once
+
+#include "sulcus/engine/renderer.h"
+
+namespace sulcus {
+
+struct NearTriangle {
+    uint16_t object;
+    uint32_t tri;
+};
+
+struct CcdScratch {
+    Vec3* vertices;     // tool vertex count
+    Vec3* normals;      // tool face count
+    double* offsets;    // tool face count
+};
+
+struct CcdResult {
+    bool hit = false;   // the tool comes within `clearance` of a triangle
+    double toi = 1.0;   // motion parameter of the first such pose (1 when none)
+    int iterations = 0;
+    bool exhausted = false;  // iteration cap reached before a verdict (treated as a hit)
+};
+
+CcdResult conservative_advancement(const Model& model, const Pose& base, const double x[6], double clearance,
+                                   const NearTriangle* near, int near_count, int max_iterations,
+                                   const CcdScratch& scratch);
+
+}  // namespace sulcus

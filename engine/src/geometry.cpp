@@ -1,0 +1,167 @@
+#include "geometry.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sulcus {
+
+TriClosest closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+    // Voronoi regions of the triangle, tested in turn (vertex, edge, face).
+    TriClosest r;
+    const Vec3 ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+    if (d1 <= 0.0 && d2 <= 0.0) {
+        r.point = a;
+        r.region = TriRegion::Vertex0;
+    } else {
+        const Vec3 bp = p - b;
+        const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+        const Vec3 cp = p - c;
+        const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+        const double vc = d1 * d4 - d3 * d2;
+        const double vb = d5 * d2 - d1 * d6;
+        const double va = d3 * d6 - d5 * d4;
+        if (d3 >= 0.0 && d4 <= d3) {
+            r.point = b;
+            r.region = TriRegion::Vertex1;
+        } else if (d6 >= 0.0 && d5 <= d6) {
+            r.point = c;
+            r.region = TriRegion::Vertex2;
+        } else if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+            r.point = a + (d1 / (d1 - d3)) * ab;
+            r.region = TriRegion::Edge0;
+        } else if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+            const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+            r.point = b + w * (c - b);
+            r.region = TriRegion::Edge1;
+        } else if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+            r.point = a + (d2 / (d2 - d6)) * ac;
+            r.region = TriRegion::Edge2;
+        } else {
+            const double den = 1.0 / (va + vb + vc);
+            r.point = a + ab * (vb * den) + ac * (vc * den);
+            r.region = TriRegion::Face;
+        }
+    }
+    r.distance = glm::length(p - r.point);
+    return r;
+}
+
+SegmentClosest closest_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
+    SegmentClosest r;
+    const Vec3 d1 = p1 - p0, d2 = q1 - q0, w = p0 - q0;
+    const double a = glm::dot(d1, d1), e = glm::dot(d2, d2), f = glm::dot(d2, w);
+    double s = 0.0, t = 0.0;
+    if (a <= 0.0 && e <= 0.0) {
+        s = t = 0.0;
+    } else if (a <= 0.0) {
+        t = std::clamp(f / e, 0.0, 1.0);
+    } else {
+        const double c = glm::dot(d1, w);
+        if (e <= 0.0) {
+            s = std::clamp(-c / a, 0.0, 1.0);
+        } else {
+            const double b = glm::dot(d1, d2);
+            const double denom = a * e - b * b;
+            // Near-parallel segments: any s works; take the start and clamp.
+            s = denom > 1e-14 * a * e ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+            t = (b * s + f) / e;
+            if (t < 0.0) {
+                t = 0.0;
+                s = std::clamp(-c / a, 0.0, 1.0);
+            } else if (t > 1.0) {
+                t = 1.0;
+                s = std::clamp((b - c) / a, 0.0, 1.0);
+            }
+        }
+    }
+    r.s = s;
+    r.t = t;
+    r.distance = glm::length((p0 + s * d1) - (q0 + t * d2));
+    return r;
+}
+
+namespace {
+
+// Separation along unit axis n with the polytope on the positive side: min over the polytope
+// minus max over the triangle; also the other orientation. Returns the larger, with its sign.
+inline double axis_separation(const ConvexView& poly, const Vec3& n, const Vec3& a, const Vec3& b, const Vec3& c,
+                              double& sign) {
+    double pmin = 1e300, pmax = -1e300;
+    for (int i = 0; i < poly.vertex_count; ++i) {
+        const double v = glm::dot(n, poly.vertices[i]);
+        pmin = std::min(pmin, v);
+        pmax = std::max(pmax, v);
+    }
+    const double ta = glm::dot(n, a), tb = glm::dot(n, b), tc = glm::dot(n, c);
+    const double tmin = std::min(ta, std::min(tb, tc)), tmax = std::max(ta, std::max(tb, tc));
+    const double pos = pmin - tmax, neg = tmin - pmax;
+    sign = pos >= neg ? 1.0 : -1.0;
+    return std::max(pos, neg);
+}
+
+}  // namespace
+
+SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c) {
+    SatResult best;
+    best.separation = -1e300;
+    auto consider = [&](const Vec3& axis, int kind, int index) {
+        double sign = 1.0;
+        const double s = axis_separation(poly, axis, a, b, c, sign);
+        if (s > best.separation) {
+            best.separation = s;
+            best.axis = sign * axis;
+            best.kind = kind;
+            best.index = index;
+        }
+    };
+    const Vec3 tn = glm::cross(b - a, c - a);
+    const double tl = glm::length(tn);
+    if (tl > 0.0) consider(tn / tl, 0, 0);
+    for (int f = 0; f < poly.face_count; ++f) consider(poly.normals[f], 1, f);
+    const Vec3 te[3] = {b - a, c - b, a - c};
+    for (int k = 0; k < 3; ++k) {
+        for (int e = 0; e < poly.edge_count; ++e) {
+            const Vec3 pe = poly.vertices[poly.edges[e][1]] - poly.vertices[poly.edges[e][0]];
+            const Vec3 u = glm::cross(te[k], pe);
+            const double ul = glm::length(u);
+            // Near-parallel edge pairs give no new axis: the face normals cover them.
+            if (ul <= 1e-9 * glm::length(te[k]) * glm::length(pe)) continue;
+            consider(u / ul, 2, k * poly.edge_count + e);
+        }
+    }
+    return best;
+}
+
+namespace {
+
+double triangle_triangle_distance(const Vec3 p[3], const Vec3 q[3]) {
+    double best = 1e300;
+    for (int i = 0; i < 3; ++i) {
+        best = std::min(best, closest_on_triangle(p[i], q[0], q[1], q[2]).distance);
+        best = std::min(best, closest_on_triangle(q[i], p[0], p[1], p[2]).distance);
+    }
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            best = std::min(best, closest_segments(p[i], p[(i + 1) % 3], q[j], q[(j + 1) % 3]).distance);
+    return best;
+}
+
+}  // namespace
+
+double distance_convex_triangle(const ConvexView& poly, const uint32_t (*triangles)[3], int triangle_count,
+                                const Vec3& a, const Vec3& b, const Vec3& c) {
+    // Overlap first: the separating-axis test is exact for convex against triangle.
+    const SatResult sat = separate_convex_triangle(poly, a, b, c);
+    if (sat.separation <= 0.0) return 0.0;
+    const Vec3 q[3] = {a, b, c};
+    double best = 1e300;
+    for (int i = 0; i < triangle_count; ++i) {
+        const Vec3 p[3] = {poly.vertices[triangles[i][0]], poly.vertices[triangles[i][1]],
+                           poly.vertices[triangles[i][2]]};
+        best = std::min(best, triangle_triangle_distance(p, q));
+    }
+    return best;
+}
+
+}  // namespace sulcus

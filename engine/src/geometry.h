@@ -1,0 +1,58 @@
+// Geometric primitives used by the servo step: closest points with their features, segment
+// distances, and separating-axis tests between the convex tool and one triangle.
+#pragma once
+
+#include "sulcus/engine/types.h"
+
+namespace sulcus {
+
+// Which feature of a triangle holds the closest point: the face, an edge (k: v[k] -> v[k+1]) or a
+// vertex k.
+enum class TriRegion : uint8_t { Face, Edge0, Edge1, Edge2, Vertex0, Vertex1, Vertex2 };
+
+struct TriClosest {
+    Vec3 point;
+    double distance = 0.0;
+    TriRegion region = TriRegion::Face;
+};
+
+// Closest point of triangle (a, b, c) to p, with the feature it lies on.
+TriClosest closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
+struct SegmentClosest {
+    double s = 0.0, t = 0.0;  // parameters on [p0,p1] and [q0,q1]
+    double distance = 0.0;
+};
+
+// Closest points of segments [p0,p1] and [q0,q1] (parallel segments handled).
+SegmentClosest closest_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1);
+
+// A convex polytope in world coordinates: vertices, face planes (n . x <= d inside) and edges.
+struct ConvexView {
+    const Vec3* vertices = nullptr;
+    int vertex_count = 0;
+    const Vec3* normals = nullptr;  // world unit normals
+    const double* offsets = nullptr;
+    int face_count = 0;
+    const uint32_t (*edges)[2] = nullptr;
+    int edge_count = 0;
+};
+
+// Largest separation of the convex polytope and triangle (a, b, c) over the separating-axis
+// candidates (triangle normal, polytope face normals, edge cross products), in metres;
+// negative when they overlap (then minus the smallest overlap over those axes).
+// Reports the winning axis (unit, pointing from the triangle towards the polytope).
+struct SatResult {
+    double separation = 0.0;
+    Vec3 axis{0.0};
+    int kind = 0;   // 0 triangle normal, 1 polytope face, 2 edge pair
+    int index = 0;  // face index (kind 1), or tri_edge * edge_count + poly_edge (kind 2)
+};
+SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c);
+
+// Distance between the convex polytope (as its triangles) and a triangle: 0 when they touch or
+// overlap. `triangles` index poly.vertices.
+double distance_convex_triangle(const ConvexView& poly, const uint32_t (*triangles)[3], int triangle_count,
+                                const Vec3& a, const Vec3& b, const Vec3& c);
+
+}  // namespace sulcus

@@ -1,0 +1,92 @@
+// Builds the immutable model of the renderer: the convex tool's features and each object's
+// world-placed mesh, adjacency and BVH.
+#include "sulcus/engine/renderer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace sulcus {
+
+namespace {
+
+// Largest coordinate magnitude of a mesh, for scale-aware tolerances.
+double mesh_scale(const TriMesh& m) {
+    double s = 0.0;
+    for (const Vec3& v : m.vertices) s = std::max(s, std::max(std::abs(v.x), std::max(std::abs(v.y), std::abs(v.z))));
+    return std::max(s, 1e-9);
+}
+
+std::string build_tool(const TriMesh& mesh, ModelTool& tool) {
+    tool.mesh = mesh;
+    tool.topology = build_topology(mesh);
+    const double tol = 1e-9 * mesh_scale(mesh);
+    // Distinct face planes: coplanar triangles share one plane.
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+        const Vec3& n = tool.topology.triangle_normals[t];
+        const double d = glm::dot(n, mesh.vertices[mesh.triangles[t][0]]);
+        bool found = false;
+        for (size_t f = 0; f < tool.face_normals.size(); ++f) {
+            if (glm::length(tool.face_normals[f] - n) < 1e-9 && std::abs(tool.face_offsets[f] - d) <= tol) {
+                found = true;
+                break;
+            }
+        }
+        if (!found) {
+            tool.face_normals.push_back(n);
+            tool.face_offsets.push_back(d);
+        }
+    }
+    // Convexity: every vertex on the inner side of every face plane.
+    for (size_t f = 0; f < tool.face_normals.size(); ++f) {
+        for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+            const double s = glm::dot(tool.face_normals[f], mesh.vertices[v]) - tool.face_offsets[f];
+            if (s > tol)
+                return "tool mesh is not convex: vertex " + std::to_string(v) + " lies " + std::to_string(s) +
+                       " m outside face plane " + std::to_string(f);
+        }
+    }
+    for (const MeshEdge& e : tool.topology.edges)
+        if (e.convexity != Convexity::Flat) tool.edges.push_back({e.v[0], e.v[1]});
+    for (const Vec3& v : mesh.vertices) tool.radius_m = std::max(tool.radius_m, glm::length(v));
+    return "";
+}
+
+}  // namespace
+
+ModelBuild build_model(const TriMesh& tool_mesh, const std::vector<SceneObject>& objects,
+                       const RendererSettings& settings) {
+    ModelBuild out;
+    if (std::string err = validate_mesh(tool_mesh); !err.empty()) {
+        out.error = "tool: " + err;
+        return out;
+    }
+    auto model = std::make_unique<Model>();
+    model->settings = settings;
+    if (std::string err = build_tool(tool_mesh, model->tool); !err.empty()) {
+        out.error = "tool: " + err;
+        return out;
+    }
+    if (objects.size() > 65535) {
+        out.error = "too many objects (at most 65535)";
+        return out;
+    }
+    for (const SceneObject& so : objects) {
+        if (std::string err = validate_mesh(so.mesh); !err.empty()) {
+            out.error = so.name + ": " + err;
+            return out;
+        }
+        ModelObject o;
+        o.name = so.name;
+        o.pose = so.pose;
+        o.mesh = so.mesh;
+        for (Vec3& v : o.mesh.vertices) v = so.pose.apply(v);
+        o.topology = build_topology(o.mesh);
+        o.bvh = Bvh(o.mesh);
+        model->objects.push_back(std::move(o));
+    }
+    out.model = std::move(model);
+    return out;
+}
+
+}  // namespace sulcus

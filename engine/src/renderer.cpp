@@ -1,0 +1,764 @@
+// The servo step of the configuration-based renderer (seed paper sections II-IV), as named,
+// timed stages:
+//
+//   detect  which object triangles the tool can reach this tick (BVH over the motion's bound),
+//           and in free motion a conservative-advancement CCD from the last graphic pose to the
+//           new haptic pose: when the whole motion is collision-free the graphic tool simply
+//           follows the haptic tool.
+//   gather  the principal contacts: for every tool vertex, object vertex and pair of edges in
+//           reach, the object feature it faces (face, edge or vertex) is looked up and resolved
+//           over the mesh adjacency by its convexity (Table 1): a face gives a V-F atom (eq. 6),
+//           a concave edge or vertex the conjunction of its faces (eq. 8), a convex edge or vertex
+//           the one face the tool is in front of -- with the other faces as candidates when tied;
+//           convex object vertices give F-V atoms against the tool face they are outside of, and
+//           convex object edges E-E atoms on the dynamic plane of eq. 7.
+//   solve   for each candidate set, the QP of eq. 1-5 in the rotation-vector coordinates about
+//           the last graphic pose, re-linearized until every atom holds exactly within
+//           constraint_tol_m; an exact separating-axis check of every triangle in reach guards
+//           the result and adds the separating plane of any triangle the atoms missed.
+//   select  the feasible candidate of least energy (eq. 3): the local solution.
+//   force   eq. 4.
+#include "sulcus/engine/renderer.h"
+
+#include "ccd.h"
+#include "contact_atoms.h"
+#include "geometry.h"
+#include "so3.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+
+namespace sulcus {
+
+const char* to_string(StepStatus s) {
+    switch (s) {
+        case StepStatus::Free: return "free";
+        case StepStatus::Contact: return "contact";
+        case StepStatus::Partial: return "partial";
+        case StepStatus::Held: return "held";
+        case StepStatus::BadInput: return "bad_input";
+    }
+    return "unknown";
+}
+
+State make_state(const Pose& pose) {
+    State s;
+    s.graphic = pose;
+    s.graphic.orientation = glm::normalize(pose.orientation);
+    s.last_haptic = s.graphic;
+    s.initialized = true;
+    return s;
+}
+
+void compute_wrench(const HapticSettings& h, const Pose& graphic, const Pose& haptic, Vec3& force_N,
+                    Vec3& torque_Nm) {
+    // eq. 4: F = K_e (q_g - q_h); the rotational difference as a world rotation vector.
+    force_N = h.stiffness_N_per_m * (graphic.position - haptic.position);
+    torque_Nm = h.rotational_stiffness_Nm_per_rad *
+                quat_log(graphic.orientation * glm::conjugate(haptic.orientation));
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double micros(Clock::time_point a, Clock::time_point b) {
+    return std::chrono::duration<double, std::micro>(b - a).count();
+}
+
+constexpr int kMaxToolVertices = 4096;
+constexpr int kMaxToolFaces = 4096;
+constexpr int kMaxNear = 8192;
+constexpr int kMaxAtoms = 1024;
+constexpr int kMaxFeatures = 4096;
+constexpr int kMaxAlts = 32;
+constexpr int kMaxHalvings = 6;
+constexpr int kMaxCcdIterations = 64;
+// A tool vertex more than this behind a face plane does not face it (it is across a thin part).
+constexpr double kBackFace = 1e-6;
+
+using NearTri = NearTriangle;
+
+// A tool vertex facing an object feature: type 0 face (id = triangle), 1 edge, 2 vertex.
+struct FeatureKey {
+    uint32_t a;
+    uint16_t object;
+    uint8_t type;
+    uint32_t id;
+    bool operator<(const FeatureKey& o) const {
+        if (a != o.a) return a < o.a;
+        if (object != o.object) return object < o.object;
+        if (type != o.type) return type < o.type;
+        return id < o.id;
+    }
+    bool operator==(const FeatureKey& o) const {
+        return a == o.a && object == o.object && type == o.type && id == o.id;
+    }
+};
+
+struct ObjFeature {
+    uint16_t object;
+    uint32_t id;
+    bool operator<(const ObjFeature& o) const { return object != o.object ? object < o.object : id < o.id; }
+    bool operator==(const ObjFeature& o) const { return object == o.object && id == o.id; }
+};
+
+// An alternative principal contact: atoms[replace] swapped for `atom`.
+struct Alt {
+    int replace;
+    Atom atom;
+};
+
+struct CandidateResult {
+    bool ok = false;
+    double x[6] = {0, 0, 0, 0, 0, 0};
+    double energy = 0.0;
+    double error = 0.0;
+    int relinearizations = 0;
+    int atom_count = 0;
+};
+
+// Scratch memory of the step: allocated once per thread, reused every tick.
+struct Workspace {
+    Vec3 tool_world[kMaxToolVertices];
+    Vec3 tool_moved[kMaxToolVertices];
+    Vec3 face_n[kMaxToolFaces];
+    double face_d[kMaxToolFaces];
+    NearTri near[kMaxNear];
+    int near_count = 0;
+    FeatureKey feats[kMaxFeatures];
+    int feat_count = 0;
+    ObjFeature overts[kMaxFeatures];
+    int overt_count = 0;
+    ObjFeature oedges[kMaxFeatures];
+    int oedge_count = 0;
+    Atom atoms[kMaxAtoms];
+    int atom_count = 0;
+    Alt alts[kMaxAlts];
+    int alt_count = 0;
+    Atom cand[kMaxAtoms];
+    int cand_count = 0;
+    Atom best[kMaxAtoms];
+    int best_count = 0;
+    double best_mult_row[kMaxAtoms];
+    qp::Problem problem;
+    qp::Solution solution;
+    qp::WarmStart warm;
+};
+
+Workspace& workspace() {
+    thread_local std::unique_ptr<Workspace> ws = std::make_unique<Workspace>();
+    return *ws;
+}
+
+double energy_of(const HapticSettings& h, const double x[6], const double target[6]) {
+    double e = 0.0;
+    for (int j = 0; j < 3; ++j) e += h.weight_translational * (x[j] - target[j]) * (x[j] - target[j]);
+    for (int j = 3; j < 6; ++j) e += h.weight_rotational * (x[j] - target[j]) * (x[j] - target[j]);
+    return 0.5 * e;
+}
+
+// The tool placed at fraction tau of the straight motion from `base` by `x`.
+void place_tool(const Model& model, const Pose& base, const double x[6], double tau, Vec3* out) {
+    const Vec3 dp(x[0], x[1], x[2]);
+    const Vec3 th(x[3], x[4], x[5]);
+    const Quat q = glm::normalize(quat_exp(tau * th) * base.orientation);
+    const Vec3 p = base.position + tau * dp;
+    const auto& verts = model.tool.mesh.vertices;
+    for (size_t i = 0; i < verts.size(); ++i) out[i] = q * verts[i] + p;
+}
+
+ConvexView tool_view(const Model& model, const Vec3* world_vertices, const Workspace& w) {
+    ConvexView v;
+    v.vertices = world_vertices;
+    v.vertex_count = static_cast<int>(model.tool.mesh.vertices.size());
+    v.normals = w.face_n;
+    v.offsets = w.face_d;
+    v.face_count = static_cast<int>(model.tool.face_normals.size());
+    v.edges = reinterpret_cast<const uint32_t (*)[2]>(model.tool.edges.data());
+    v.edge_count = static_cast<int>(model.tool.edges.size());
+    return v;
+}
+
+void set_tool_planes(const Model& model, const Quat& q, const Vec3& p, Workspace& w) {
+    for (size_t f = 0; f < model.tool.face_normals.size(); ++f) {
+        w.face_n[f] = q * model.tool.face_normals[f];
+        w.face_d[f] = model.tool.face_offsets[f] + glm::dot(w.face_n[f], p);
+    }
+}
+
+// detect: triangles whose boxes meet the tool's box inflated by `reach`. False on overflow.
+bool gather_near(const Model& model, const Vec3* tool_world, double reach, Workspace& w) {
+    Aabb box;
+    for (size_t i = 0; i < model.tool.mesh.vertices.size(); ++i) box.grow(tool_world[i]);
+    box.inflate(reach);
+    w.near_count = 0;
+    bool overflow = false;
+    for (size_t o = 0; o < model.objects.size(); ++o) {
+        model.objects[o].bvh.query(box, [&](uint32_t tri) {
+            if (w.near_count >= kMaxNear) {
+                overflow = true;
+                return false;
+            }
+            w.near[w.near_count++] = NearTri{static_cast<uint16_t>(o), tri};
+            return true;
+        });
+        if (overflow) return false;
+    }
+    return true;
+}
+
+// detect, free motion: true when the whole motion stays farther than `clearance` from every
+// triangle in reach.
+bool motion_is_free(const Model& model, const Pose& base, const double x[6], double clearance, Workspace& w) {
+    const CcdScratch scratch{w.tool_moved, w.face_n, w.face_d};
+    const CcdResult r = conservative_advancement(model, base, x, clearance, w.near, w.near_count,
+                                                 kMaxCcdIterations, scratch);
+    // The scratch planes held the moving tool; restore the start pose's planes.
+    set_tool_planes(model, base.orientation, base.position, w);
+    return !r.hit;
+}
+
+void add_atom(Workspace& w, const Atom& a) {
+    if (w.atom_count < kMaxAtoms) w.atoms[w.atom_count++] = a;
+}
+
+void add_alt(Workspace& w, int replace, const Atom& a) {
+    if (w.alt_count < kMaxAlts) w.alts[w.alt_count++] = Alt{replace, a};
+}
+
+Atom vf_atom(uint16_t object, uint32_t tool_vertex, uint32_t tri) {
+    Atom a;
+    a.kind = AtomKind::VertexFace;
+    a.object = object;
+    a.tool_vertex = tool_vertex;
+    a.object_triangle = tri;
+    return a;
+}
+
+double signed_to_plane(const ModelObject& obj, uint32_t tri, const Vec3& p) {
+    return glm::dot(obj.topology.triangle_normals[tri], p - obj.mesh.vertices[obj.mesh.triangles[tri][0]]);
+}
+
+// Resolves a disjunction: the tool vertex must stay in front of one of the faces `tris`
+// (a convex edge or vertex). The face it is most in front of becomes the atom; faces within
+// tie_tol of it become candidates.
+void add_disjunction(const Model& model, Workspace& w, uint16_t object, uint32_t a, const Vec3& wa,
+                     const uint32_t* tris, int count) {
+    const ModelObject& obj = model.objects[object];
+    int best = -1;
+    double best_d = -1e300;
+    for (int i = 0; i < count; ++i) {
+        const double d = signed_to_plane(obj, tris[i], wa);
+        if (d > best_d) {
+            best_d = d;
+            best = i;
+        }
+    }
+    if (best < 0 || best_d < -kBackFace) return;
+    const int index = w.atom_count;
+    add_atom(w, vf_atom(object, a, tris[best]));
+    for (int i = 0; i < count; ++i) {
+        if (i == best) continue;
+        const double d = signed_to_plane(obj, tris[i], wa);
+        if (d >= best_d - model.settings.tie_tol_m &&
+            glm::dot(obj.topology.triangle_normals[tris[i]], obj.topology.triangle_normals[tris[best]]) < 1.0 - 1e-12)
+            add_alt(w, index, vf_atom(object, a, tris[i]));
+    }
+}
+
+// gather: the principal-contact atoms of every feature pair within `reach`.
+void gather_atoms(const Model& model, double reach, Workspace& w) {
+    const ModelTool& tool = model.tool;
+    const int nv = static_cast<int>(tool.mesh.vertices.size());
+    w.atom_count = 0;
+    w.alt_count = 0;
+    w.feat_count = 0;
+    w.overt_count = 0;
+    w.oedge_count = 0;
+
+    // Tool vertices against object features (V-F and its combinations).
+    for (int i = 0; i < w.near_count; ++i) {
+        const NearTri nt = w.near[i];
+        const ModelObject& obj = model.objects[nt.object];
+        const auto& t = obj.mesh.triangles[nt.tri];
+        const Vec3 &p0 = obj.mesh.vertices[t[0]], &p1 = obj.mesh.vertices[t[1]], &p2 = obj.mesh.vertices[t[2]];
+        const Vec3& n = obj.topology.triangle_normals[nt.tri];
+        for (int a = 0; a < nv; ++a) {
+            const double plane = glm::dot(n, w.tool_world[a] - p0);
+            if (plane > reach || plane < -kBackFace) continue;
+            const TriClosest c = closest_on_triangle(w.tool_world[a], p0, p1, p2);
+            if (c.distance > reach) continue;
+            FeatureKey key{static_cast<uint32_t>(a), nt.object, 0, nt.tri};
+            switch (c.region) {
+                case TriRegion::Face: break;
+                case TriRegion::Edge0: key.type = 1; key.id = obj.topology.triangle_edges[nt.tri][0]; break;
+                case TriRegion::Edge1: key.type = 1; key.id = obj.topology.triangle_edges[nt.tri][1]; break;
+                case TriRegion::Edge2: key.type = 1; key.id = obj.topology.triangle_edges[nt.tri][2]; break;
+                case TriRegion::Vertex0: key.type = 2; key.id = t[0]; break;
+                case TriRegion::Vertex1: key.type = 2; key.id = t[1]; break;
+                case TriRegion::Vertex2: key.type = 2; key.id = t[2]; break;
+            }
+            if (w.feat_count < kMaxFeatures) w.feats[w.feat_count++] = key;
+        }
+        for (int k = 0; k < 3; ++k) {
+            if (w.overt_count < kMaxFeatures) w.overts[w.overt_count++] = ObjFeature{nt.object, t[k]};
+            if (w.oedge_count < kMaxFeatures)
+                w.oedges[w.oedge_count++] = ObjFeature{nt.object, obj.topology.triangle_edges[nt.tri][k]};
+        }
+    }
+    std::sort(w.feats, w.feats + w.feat_count);
+    w.feat_count = static_cast<int>(std::unique(w.feats, w.feats + w.feat_count) - w.feats);
+    for (int i = 0; i < w.feat_count; ++i) {
+        const FeatureKey& k = w.feats[i];
+        const ModelObject& obj = model.objects[k.object];
+        const Vec3& wa = w.tool_world[k.a];
+        if (k.type == 0) {
+            add_atom(w, vf_atom(k.object, k.a, k.id));
+        } else if (k.type == 1) {
+            const MeshEdge& e = obj.topology.edges[k.id];
+            if (e.convexity == Convexity::Flat) {
+                add_disjunction(model, w, k.object, k.a, wa, e.tri.data(), 1);
+            } else if (e.convexity == Convexity::Concave) {
+                // eq. 8: both faces of a concave edge hold at once (Types 3 and 5).
+                for (uint32_t tri : e.tri)
+                    if (signed_to_plane(obj, tri, wa) >= -kBackFace) add_atom(w, vf_atom(k.object, k.a, tri));
+            } else {
+                add_disjunction(model, w, k.object, k.a, wa, e.tri.data(), 2);
+            }
+        } else {
+            const auto& topo = obj.topology;
+            const uint32_t* tris = topo.vertex_triangles.data() + topo.vertex_triangle_offsets[k.id];
+            const int count = static_cast<int>(topo.vertex_triangle_offsets[k.id + 1] - topo.vertex_triangle_offsets[k.id]);
+            if (topo.vertex_convexity[k.id] == Convexity::Concave) {
+                // eq. 8: every face around a concave vertex (Type 4).
+                for (int j = 0; j < count; ++j)
+                    if (signed_to_plane(obj, tris[j], wa) >= -kBackFace) add_atom(w, vf_atom(k.object, k.a, tris[j]));
+            } else {
+                add_disjunction(model, w, k.object, k.a, wa, tris, count);
+            }
+        }
+    }
+
+    // Convex object vertices against tool faces (F-V, Type 11): outside the face most in front.
+    std::sort(w.overts, w.overts + w.overt_count);
+    w.overt_count = static_cast<int>(std::unique(w.overts, w.overts + w.overt_count) - w.overts);
+    const int nf = static_cast<int>(tool.face_normals.size());
+    for (int i = 0; i < w.overt_count; ++i) {
+        const ModelObject& obj = model.objects[w.overts[i].object];
+        const uint32_t v = w.overts[i].id;
+        const Convexity cv = obj.topology.vertex_convexity[v];
+        if (cv != Convexity::Convex && cv != Convexity::Mixed) continue;
+        const Vec3& p = obj.mesh.vertices[v];
+        int best = -1;
+        double best_s = -1e300;
+        for (int f = 0; f < nf; ++f) {
+            const double s = glm::dot(w.face_n[f], p) - w.face_d[f];
+            if (s > best_s) {
+                best_s = s;
+                best = f;
+            }
+        }
+        if (best < 0 || best_s > reach || best_s < -kBackFace) continue;
+        Atom at;
+        at.kind = AtomKind::FaceVertex;
+        at.object = w.overts[i].object;
+        at.object_vertex = v;
+        at.tool_face = static_cast<uint32_t>(best);
+        const int index = w.atom_count;
+        add_atom(w, at);
+        for (int f = 0; f < nf; ++f) {
+            if (f == best) continue;
+            const double s = glm::dot(w.face_n[f], p) - w.face_d[f];
+            if (s >= best_s - model.settings.tie_tol_m) {
+                Atom alt = at;
+                alt.tool_face = static_cast<uint32_t>(f);
+                add_alt(w, index, alt);
+            }
+        }
+    }
+
+    // Tool edges against convex object edges (E-E, Type 2) on the dynamic plane of eq. 7.
+    std::sort(w.oedges, w.oedges + w.oedge_count);
+    w.oedge_count = static_cast<int>(std::unique(w.oedges, w.oedges + w.oedge_count) - w.oedges);
+    for (int i = 0; i < w.oedge_count; ++i) {
+        const ModelObject& obj = model.objects[w.oedges[i].object];
+        const MeshEdge& e = obj.topology.edges[w.oedges[i].id];
+        if (e.convexity != Convexity::Convex) continue;
+        const Vec3& v0 = obj.mesh.vertices[e.v[0]];
+        const Vec3& v1 = obj.mesh.vertices[e.v[1]];
+        const Vec3 eo = v1 - v0;
+        const Vec3 bisector = obj.topology.triangle_normals[e.tri[0]] + obj.topology.triangle_normals[e.tri[1]];
+        for (size_t te = 0; te < tool.edges.size(); ++te) {
+            const Vec3& a0 = w.tool_world[tool.edges[te][0]];
+            const Vec3& a1 = w.tool_world[tool.edges[te][1]];
+            const SegmentClosest sc = closest_segments(a0, a1, v0, v1);
+            if (sc.distance > reach) continue;
+            if (sc.s <= 1e-9 || sc.s >= 1.0 - 1e-9 || sc.t <= 1e-9 || sc.t >= 1.0 - 1e-9) continue;
+            const Vec3 et = a1 - a0;
+            const Vec3 u = glm::cross(eo, et);
+            const double ul = glm::length(u);
+            // Near-parallel edges: the plane of eq. 7 is undefined; the vertices' atoms hold.
+            if (ul < 1e-3 * glm::length(eo) * glm::length(et)) continue;
+            const double ub = glm::dot(u, bisector);
+            double sign;
+            if (std::abs(ub) > 1e-6 * ul * glm::length(bisector)) {
+                sign = ub > 0.0 ? 1.0 : -1.0;
+            } else {
+                const double g = glm::dot(u, a0 - v0);
+                if (g == 0.0) continue;
+                sign = g > 0.0 ? 1.0 : -1.0;
+            }
+            // The tool edge behind the object edge is across the solid from it: not a contact.
+            if (sign * glm::dot(u / ul, a0 - v0) < -kBackFace) continue;
+            Atom at;
+            at.kind = AtomKind::EdgeEdge;
+            at.object = w.oedges[i].object;
+            at.object_edge = w.oedges[i].id;
+            at.tool_edge = static_cast<uint32_t>(te);
+            at.sign = sign;
+            add_atom(w, at);
+        }
+    }
+}
+
+// The separating plane at the step's start of a triangle that the atoms let the tool reach:
+// atoms that keep every tool vertex (or the triangle's vertices) on its side.
+void add_separating_plane(const Model& model, const NearTri& nt, double reach, Workspace& w) {
+    const ModelObject& obj = model.objects[nt.object];
+    const auto& t = obj.mesh.triangles[nt.tri];
+    const Vec3 p[3] = {obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]};
+    const ConvexView view = tool_view(model, w.tool_world, w);
+    const SatResult sat = separate_convex_triangle(view, p[0], p[1], p[2]);
+    const int nv = view.vertex_count;
+    if (sat.kind == 1) {
+        for (int k = 0; k < 3; ++k) {
+            const double s = glm::dot(w.face_n[sat.index], p[k]) - w.face_d[sat.index];
+            if (s > sat.separation + reach) continue;
+            Atom at;
+            at.kind = AtomKind::FaceVertex;
+            at.object = nt.object;
+            at.object_vertex = t[k];
+            at.tool_face = static_cast<uint32_t>(sat.index);
+            if (w.cand_count < kMaxAtoms) w.cand[w.cand_count++] = at;
+        }
+        return;
+    }
+    // Triangle normal or edge-pair axis: a plane frozen for this step through the triangle's
+    // vertex furthest along the axis.
+    int vk = 0;
+    for (int k = 1; k < 3; ++k)
+        if (glm::dot(sat.axis, p[k]) > glm::dot(sat.axis, p[vk])) vk = k;
+    const double top = glm::dot(sat.axis, p[vk]);
+    for (int a = 0; a < nv; ++a) {
+        if (glm::dot(sat.axis, w.tool_world[a]) - top > sat.separation + reach) continue;
+        Atom at;
+        at.kind = AtomKind::FixedAxis;
+        at.object = nt.object;
+        at.object_vertex = t[vk];
+        at.tool_vertex = static_cast<uint32_t>(a);
+        at.axis = sat.axis;
+        if (w.cand_count < kMaxAtoms) w.cand[w.cand_count++] = at;
+    }
+}
+
+// solve: one candidate set by sequential linearization (re-linearize until exact).
+CandidateResult solve_candidate(const Model& model, const Pose& base, const double target[6], double reach,
+                                Workspace& w, StepStats& stats) {
+    const RendererSettings& S = model.settings;
+    const HapticSettings& h = S.haptic;
+    CandidateResult r;
+    qp::Problem& P = w.problem;
+    for (int j = 0; j < 6; ++j) {
+        P.weight[j] = j < 3 ? h.weight_translational : h.weight_rotational;
+        P.target[j] = target[j];
+        // eq. 5: each coordinate between the last graphic pose (0) and the haptic pose.
+        P.lower[j] = std::min(0.0, target[j]);
+        P.upper[j] = std::max(0.0, target[j]);
+    }
+    double x[6] = {0, 0, 0, 0, 0, 0};
+    w.warm.count = 0;
+    int guard_rounds = 0;
+    for (int it = 0; it < S.max_relinearizations; ++it) {
+        const ToolPoseAt at = tool_pose_at(base, x);
+        const int rows = std::min(w.cand_count, qp::kMaxRows);
+        P.rows = rows;
+        for (int i = 0; i < rows; ++i) {
+            double grad[6];
+            const double g = evaluate_atom(model, w.cand[i], at, grad);
+            double gx = 0.0;
+            for (int j = 0; j < 6; ++j) {
+                P.a[i][j] = grad[j];
+                gx += grad[j] * x[j];
+            }
+            // g(x_k) + grad . (x - x_k) >= 0
+            P.b[i] = gx - g;
+        }
+        const qp::Status st = qp::solve(P, S.qp, w.warm.count ? &w.warm : nullptr, w.solution);
+        ++stats.qp_solves;
+        stats.qp_iterations += w.solution.iterations;
+        r.relinearizations = it + 1;
+        if (st != qp::Status::Optimal) return r;
+        w.warm.count = w.solution.active_count;
+        for (int k = 0; k < w.solution.active_count; ++k) w.warm.active[k] = w.solution.active[k];
+        for (int j = 0; j < 6; ++j) x[j] = w.solution.x[j];
+
+        // The exact constraint error at the new pose: no atom violated, and the atoms the QP
+        // holds active really touch (no gap left by the linearization).
+        const ToolPoseAt nx = tool_pose_at(base, x);
+        double worst = 0.0;
+        for (int i = 0; i < w.cand_count; ++i) {
+            const double g = evaluate_atom(model, w.cand[i], nx, nullptr);
+            worst = std::max(worst, -g);
+        }
+        for (int k = 0; k < w.solution.active_count; ++k) {
+            const int row = w.solution.active[k];
+            if (row < 0 || row >= rows) continue;  // box bounds
+            worst = std::max(worst, evaluate_atom(model, w.cand[row], nx, nullptr));
+        }
+        if (worst > S.constraint_tol_m) continue;
+
+        // Guard: every triangle in reach must be separated from the tool at the new pose.
+        place_tool(model, base, x, 1.0, w.tool_moved);
+        const Vec3 th(x[3], x[4], x[5]);
+        const Quat q = glm::normalize(quat_exp(th) * base.orientation);
+        // Planes at the new pose for the check, then restored to the start pose.
+        set_tool_planes(model, q, base.position + Vec3(x[0], x[1], x[2]), w);
+        const ConvexView moved = tool_view(model, w.tool_moved, w);
+        int missed = 0;
+        NearTri missed_tris[8];
+        for (int i = 0; i < w.near_count && missed < 8; ++i) {
+            const ModelObject& obj = model.objects[w.near[i].object];
+            const auto& t = obj.mesh.triangles[w.near[i].tri];
+            const SatResult s = separate_convex_triangle(moved, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
+                                                         obj.mesh.vertices[t[2]]);
+            if (s.separation < -S.constraint_tol_m) missed_tris[missed++] = w.near[i];
+        }
+        set_tool_planes(model, base.orientation, base.position, w);
+        if (missed == 0) {
+            r.ok = true;
+            for (int j = 0; j < 6; ++j) r.x[j] = x[j];
+            r.energy = energy_of(h, x, target);
+            r.error = worst;
+            r.atom_count = w.cand_count;
+            return r;
+        }
+        if (++guard_rounds > 4) return r;
+        for (int m = 0; m < missed; ++m) add_separating_plane(model, missed_tris[m], reach, w);
+        // Start again from the step's start with the added planes.
+        for (int j = 0; j < 6; ++j) x[j] = 0.0;
+        w.warm.count = 0;
+    }
+    return r;
+}
+
+// Contact regions: connected groups of the triangles touched by the active atoms.
+int count_regions(const Model& model, const Atom* atoms, int count) {
+    // Small sets: a quadratic union-find over the touched triangles is cheap.
+    constexpr int kMax = 64;
+    uint16_t obj[kMax];
+    uint32_t tri[kMax];
+    int parent[kMax];
+    int n = 0;
+    for (int i = 0; i < count && n < kMax; ++i) {
+        const Atom& a = atoms[i];
+        const ModelObject& o = model.objects[a.object];
+        uint32_t t = 0;
+        if (a.kind == AtomKind::VertexFace) t = a.object_triangle;
+        else if (a.kind == AtomKind::EdgeEdge) t = o.topology.edges[a.object_edge].tri[0];
+        else t = o.topology.vertex_triangles[o.topology.vertex_triangle_offsets[a.object_vertex]];
+        obj[n] = a.object;
+        tri[n] = t;
+        parent[n] = n;
+        ++n;
+    }
+    auto find = [&](int i) {
+        while (parent[i] != i) i = parent[i] = parent[parent[i]];
+        return i;
+    };
+    for (int i = 0; i < n; ++i) {
+        for (int j = i + 1; j < n; ++j) {
+            if (obj[i] != obj[j]) continue;
+            const auto& ti = model.objects[obj[i]].mesh.triangles[tri[i]];
+            const auto& tj = model.objects[obj[j]].mesh.triangles[tri[j]];
+            bool share = false;
+            for (int a = 0; a < 3 && !share; ++a)
+                for (int b = 0; b < 3; ++b)
+                    if (ti[a] == tj[b]) share = true;
+            if (share || tri[i] == tri[j]) parent[find(i)] = find(j);
+        }
+    }
+    int regions = 0;
+    for (int i = 0; i < n; ++i)
+        if (find(i) == i) ++regions;
+    return regions;
+}
+
+}  // namespace
+
+StepResult step(const Model& model, State& state, const Pose& haptic_in) {
+    const auto t_start = Clock::now();
+    Workspace& w = workspace();
+    const RendererSettings& S = model.settings;
+    StepResult res;
+
+    // Input health: a non-finite or non-unit pose is refused; the last pose is kept.
+    const double qn = glm::length(haptic_in.orientation);
+    if (!finite(haptic_in.position) || !finite(haptic_in.orientation) || std::abs(qn - 1.0) > 1e-3) {
+        if (!state.initialized) state = make_state(Pose{});
+        res.graphic = state.graphic;
+        res.status = StepStatus::BadInput;
+        compute_wrench(S.haptic, state.graphic, state.last_haptic, res.force_N, res.torque_Nm);
+        return res;
+    }
+    Pose haptic = haptic_in;
+    haptic.orientation = haptic_in.orientation / qn;
+    if (!state.initialized) state = make_state(haptic);
+    const Pose base = state.graphic;
+
+    // The haptic pose in step coordinates: translation and world rotation vector from the base.
+    double xh[6];
+    {
+        const Vec3 dp = haptic.position - base.position;
+        const Vec3 dt = quat_log(haptic.orientation * glm::conjugate(base.orientation));
+        xh[0] = dp.x; xh[1] = dp.y; xh[2] = dp.z;
+        xh[3] = dt.x; xh[4] = dt.y; xh[5] = dt.z;
+    }
+
+    // ---- detect ----
+    const size_t nv = model.tool.mesh.vertices.size();
+    if (nv > static_cast<size_t>(kMaxToolVertices) || model.tool.face_normals.size() > static_cast<size_t>(kMaxToolFaces)) {
+        res.graphic = base;
+        res.status = StepStatus::Held;
+        compute_wrench(S.haptic, base, haptic, res.force_N, res.torque_Nm);
+        return res;
+    }
+    for (size_t i = 0; i < nv; ++i) w.tool_world[i] = base.apply(model.tool.mesh.vertices[i]);
+    set_tool_planes(model, base.orientation, base.position, w);
+
+    double scale = 1.0;
+    double target[6];
+    double reach = 0.0;
+    bool solved = false;
+    double x_sol[6] = {0, 0, 0, 0, 0, 0};
+    bool free_motion = false;
+    auto t_detect_end = t_start, t_gather_end = t_start, t_solve_end = t_start;
+    double stage_detect = 0, stage_gather = 0, stage_solve = 0;
+
+    for (int attempt = 0; attempt <= kMaxHalvings && !solved; ++attempt) {
+        auto t0 = Clock::now();
+        for (int j = 0; j < 6; ++j) target[j] = scale * xh[j];
+        const double move = std::sqrt(target[0] * target[0] + target[1] * target[1] + target[2] * target[2]);
+        const double turn = std::sqrt(target[3] * target[3] + target[4] * target[4] + target[5] * target[5]);
+        // No tool point moves further than this within the eq. 5 box.
+        reach = move + turn * (model.tool.radius_m + move) + S.contact_distance_m + 10.0 * S.constraint_tol_m;
+        if (!gather_near(model, w.tool_world, reach, w)) {
+            scale *= 0.5;
+            stage_detect += micros(t0, Clock::now());
+            continue;
+        }
+        res.stats.triangles_near = w.near_count;
+        if (w.near_count == 0 ||
+            (state.active_count == 0 && motion_is_free(model, base, target, S.contact_distance_m, w))) {
+            free_motion = true;
+            solved = true;
+            for (int j = 0; j < 6; ++j) x_sol[j] = target[j];
+            stage_detect += micros(t0, Clock::now());
+            break;
+        }
+        t_detect_end = Clock::now();
+        stage_detect += micros(t0, t_detect_end);
+
+        // ---- gather ----
+        gather_atoms(model, reach, w);
+        t_gather_end = Clock::now();
+        stage_gather += micros(t_detect_end, t_gather_end);
+        res.stats.pairs_in_contact = w.atom_count;
+
+        // ---- solve ---- candidate 0 is the default resolution; each alternative swaps one atom.
+        const int candidates = std::min(1 + w.alt_count, std::max(1, S.max_candidates));
+        double best_energy = 1e300;
+        int best_index = -1;
+        for (int c = 0; c < candidates; ++c) {
+            w.cand_count = w.atom_count;
+            std::copy(w.atoms, w.atoms + w.atom_count, w.cand);
+            if (c > 0) w.cand[w.alts[c - 1].replace] = w.alts[c - 1].atom;
+            const CandidateResult cr = solve_candidate(model, base, target, reach, w, res.stats);
+            ++res.stats.candidates;
+            // ---- select ---- least energy; ties keep the lower index (determinism).
+            if (cr.ok && cr.energy < best_energy) {
+                best_energy = cr.energy;
+                best_index = c;
+                for (int j = 0; j < 6; ++j) x_sol[j] = cr.x[j];
+                res.stats.relinearizations = cr.relinearizations;
+                res.stats.constraint_error_m = cr.error;
+                w.best_count = w.cand_count;
+                std::copy(w.cand, w.cand + w.cand_count, w.best);
+            }
+        }
+        t_solve_end = Clock::now();
+        stage_solve += micros(t_gather_end, t_solve_end);
+        if (best_index >= 0) {
+            solved = true;
+            res.stats.atoms = w.best_count;
+        } else {
+            scale *= 0.5;
+        }
+    }
+
+    const auto t_select = Clock::now();
+    Pose graphic = base;
+    state.active_count = 0;
+    if (!solved) {
+        res.status = StepStatus::Held;
+    } else {
+        const bool whole = scale == 1.0;
+        if (free_motion && whole) {
+            graphic = haptic;
+        } else {
+            const ToolPoseAt at = tool_pose_at(base, x_sol);
+            graphic.position = at.p;
+            graphic.orientation = at.q;
+        }
+        if (free_motion) {
+            res.status = whole ? StepStatus::Free : StepStatus::Partial;
+        } else {
+            // The active contacts: atoms touching at the solution.
+            const ToolPoseAt at = tool_pose_at(base, x_sol);
+            for (int i = 0; i < w.best_count; ++i) {
+                const double g = evaluate_atom(model, w.best[i], at, nullptr);
+                if (g <= S.contact_distance_m) {
+                    const Atom& a = w.best[i];
+                    if (a.kind == AtomKind::VertexFace) ++res.stats.active_vf;
+                    else if (a.kind == AtomKind::FaceVertex) ++res.stats.active_fv;
+                    else ++res.stats.active_ee;
+                    if (state.active_count < kMaxActiveAtoms) state.active[state.active_count++] = a;
+                }
+            }
+            res.contacts = res.stats.active_vf + res.stats.active_fv + res.stats.active_ee;
+            res.stats.regions = count_regions(model, state.active, state.active_count);
+            bool at_target = whole;
+            for (int j = 0; j < 6 && at_target; ++j) at_target = x_sol[j] == xh[j];
+            if (res.contacts == 0 && at_target) graphic = haptic;
+            res.status = !whole ? StepStatus::Partial : (res.contacts > 0 ? StepStatus::Contact : StepStatus::Free);
+        }
+    }
+    const auto t_force = Clock::now();
+    state.graphic = graphic;
+    state.last_haptic = haptic;
+    res.graphic = graphic;
+
+    // ---- force ---- eq. 4
+    compute_wrench(S.haptic, graphic, haptic, res.force_N, res.torque_Nm);
+    const auto t_end = Clock::now();
+    res.stats.times.detect_us = stage_detect;
+    res.stats.times.gather_us = stage_gather;
+    res.stats.times.solve_us = stage_solve;
+    res.stats.times.select_us = micros(t_select, t_force);
+    res.stats.times.force_us = micros(t_force, t_end);
+    return res;
+}
+
+}  // namespace sulcus
