@@ -614,7 +614,8 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
         return res;
     }
     Pose haptic = haptic_in;
-    haptic.orientation = haptic_in.orientation / qn;
+    // Unit to rounding is kept as given, so that free motion reproduces the input bit for bit.
+    if (std::abs(qn - 1.0) > 1e-12) haptic.orientation = haptic_in.orientation / qn;
     if (!state.initialized) state = make_state(haptic);
     const Pose base = state.graphic;
 
