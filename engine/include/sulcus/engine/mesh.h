@@ -54,8 +54,10 @@ struct MeshLoad {
     bool ok() const { return error.empty(); }
 };
 
-// Reads OBJ, STL, PLY, OFF (OpenMesh) and glTF/GLB (tinygltf), merges coincident vertices of
-// per-face formats, and validates. On failure the error names the file and the first fault.
+// Reads OBJ and OFF (strict readers: faulty faces are kept for validation to report), STL and PLY
+// (OpenMesh), glTF/GLB (tinygltf: the triangle primitives of the default scene with node transforms
+// applied), merges coincident vertices of per-face formats (STL, glTF), and validates. On failure
+// the error names the file and the first fault.
 MeshLoad load_mesh(const std::string& path);
 
 // Checks that a mesh is usable as a solid: finite coordinates, indices in range, no degenerate

@@ -1,0 +1,105 @@
+// Adjacency of a validated mesh: undirected edges with their two triangles, triangle neighbours,
+// outward normals, vertex stars, and the convex/concave classification of edges and vertices.
+// Everything is built by sorting, so the result depends only on the mesh.
+#include "mesh_edges.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+
+namespace sulcus {
+namespace {
+
+// CSR layout from (key, value) pairs listed in ascending value order; the counting sort is
+// stable, so each key's values stay ascending.
+void build_csr(size_t keys, const std::vector<std::pair<uint32_t, uint32_t>>& pairs, std::vector<uint32_t>& offsets,
+               std::vector<uint32_t>& values) {
+    offsets.assign(keys + 1, 0);
+    for (const auto& p : pairs) ++offsets[p.first + 1];
+    for (size_t i = 0; i < keys; ++i) offsets[i + 1] += offsets[i];
+    values.resize(pairs.size());
+    std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
+    for (const auto& p : pairs) values[fill[p.first]++] = p.second;
+}
+
+}  // namespace
+
+MeshTopology build_topology(const TriMesh& mesh) {
+    MeshTopology topo;
+    const size_t nt = mesh.triangles.size();
+    const size_t nv = mesh.vertices.size();
+
+    topo.triangle_normals.resize(nt);
+    for (size_t t = 0; t < nt; ++t) {
+        const auto& tri = mesh.triangles[t];
+        const Vec3& a = mesh.vertices[tri[0]];
+        topo.triangle_normals[t] = glm::normalize(glm::cross(mesh.vertices[tri[1]] - a, mesh.vertices[tri[2]] - a));
+    }
+
+    const std::vector<EdgeUse> uses = sorted_edge_uses(mesh);
+
+    topo.triangle_edges.assign(nt, {0, 0, 0});
+    topo.triangle_neighbours.assign(nt, {0, 0, 0});
+    topo.edges.reserve(uses.size() / 2);
+    for (size_t i = 0; i + 1 < uses.size(); i += 2) {
+        const EdgeUse& p = uses[i];
+        const EdgeUse& q = uses[i + 1];
+        assert(p.lo == q.lo && p.hi == q.hi && "build_topology needs a mesh that passed validate_mesh");
+        const bool p_up = p.runs_up(mesh);
+        MeshEdge e;
+        e.v = {p.lo, p.hi};
+        e.tri = p_up ? std::array<uint32_t, 2>{p.tri, q.tri} : std::array<uint32_t, 2>{q.tri, p.tri};
+        const uint32_t index = uint32_t(topo.edges.size());
+        topo.triangle_edges[p.tri][p.k] = index;
+        topo.triangle_edges[q.tri][q.k] = index;
+        topo.triangle_neighbours[p.tri][p.k] = q.tri;
+        topo.triangle_neighbours[q.tri][q.k] = p.tri;
+
+        // Signed bend angle from the normal of tri[0] to the normal of tri[1] about the edge
+        // direction v0 -> v1 (as it runs in tri[0]): positive where the surface folds away from
+        // its outward side, i.e. the far vertex of tri[1] lies behind the plane of tri[0].
+        const Vec3& n0 = topo.triangle_normals[e.tri[0]];
+        const Vec3& n1 = topo.triangle_normals[e.tri[1]];
+        const Vec3 dir = glm::normalize(mesh.vertices[e.v[1]] - mesh.vertices[e.v[0]]);
+        const double angle = std::atan2(glm::dot(glm::cross(n0, n1), dir), glm::dot(n0, n1));
+        if (std::abs(angle) < kFlatEdgeAngle) {
+            e.convexity = Convexity::Flat;
+            e.dihedral = 0.0;
+        } else {
+            e.convexity = angle > 0.0 ? Convexity::Convex : Convexity::Concave;
+            e.dihedral = angle;
+        }
+        topo.edges.push_back(e);
+    }
+
+    // Vertex stars, each list ascending (pairs are generated in ascending triangle / edge order).
+    std::vector<std::pair<uint32_t, uint32_t>> pairs;
+    pairs.reserve(3 * nt);
+    for (size_t t = 0; t < nt; ++t)
+        for (uint32_t v : mesh.triangles[t]) pairs.push_back({v, uint32_t(t)});
+    build_csr(nv, pairs, topo.vertex_triangle_offsets, topo.vertex_triangles);
+
+    pairs.clear();
+    for (size_t e = 0; e < topo.edges.size(); ++e) {
+        pairs.push_back({topo.edges[e].v[0], uint32_t(e)});
+        pairs.push_back({topo.edges[e].v[1], uint32_t(e)});
+    }
+    build_csr(nv, pairs, topo.vertex_edge_offsets, topo.vertex_edges);
+
+    topo.vertex_convexity.assign(nv, Convexity::Flat);
+    for (size_t v = 0; v < nv; ++v) {
+        bool convex = false, concave = false;
+        for (uint32_t i = topo.vertex_edge_offsets[v]; i < topo.vertex_edge_offsets[v + 1]; ++i) {
+            const Convexity c = topo.edges[topo.vertex_edges[i]].convexity;
+            convex |= c == Convexity::Convex;
+            concave |= c == Convexity::Concave;
+        }
+        topo.vertex_convexity[v] = convex && concave ? Convexity::Mixed
+                                   : convex          ? Convexity::Convex
+                                   : concave         ? Convexity::Concave
+                                                     : Convexity::Flat;
+    }
+    return topo;
+}
+
+}  // namespace sulcus
