@@ -34,6 +34,7 @@ public:
 private:
     std::vector<Node> nodes_;
     std::vector<uint32_t> order_;  // triangle indices, grouped by leaf
+    std::vector<Aabb> boxes_;      // box of triangle order_[i] at i, so leaves report exactly
     int depth_ = 0;
 };
 
@@ -49,8 +50,8 @@ bool Bvh::query(const Aabb& q, Visit&& visit) const {
         const Node& n = nodes_[stack[--top]];
         if (!n.box.overlaps(q)) continue;
         if (n.count > 0) {
-            for (uint32_t i = 0; i < n.count; ++i)
-                if (!visit(order_[n.first + i])) return false;
+            for (uint32_t i = n.first; i < n.first + n.count; ++i)
+                if (boxes_[i].overlaps(q) && !visit(order_[i])) return false;
         } else {
             stack[top++] = n.first + 1;
             stack[top++] = n.first;

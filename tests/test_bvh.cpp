@@ -1,0 +1,272 @@
+// The BVH reports exactly the triangles whose own box overlaps the query box (checked against
+// brute force), and its structure keeps the promises the query relies on.
+#include "sulcus/engine/bvh.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <set>
+#include <vector>
+
+namespace sulcus {
+namespace {
+
+Aabb triangle_box(const TriMesh& m, uint32_t t) {
+    Aabb b;
+    for (uint32_t v : m.triangles[t]) b.grow(m.vertices[v]);
+    return b;
+}
+
+// A soup of n random triangles in the unit cube; sizes vary over three orders of magnitude.
+// flat_axis >= 0 puts every vertex on the plane of that axis = 0.5 (flat boxes).
+TriMesh random_soup(size_t n, std::mt19937_64& rng, int flat_axis = -1) {
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    TriMesh m;
+    for (size_t t = 0; t < n; ++t) {
+        const Vec3 c(u(rng), u(rng), u(rng));
+        const double size = std::pow(10.0, -3.0 * u(rng));
+        for (int k = 0; k < 3; ++k) {
+            Vec3 p = c + size * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
+            if (flat_axis >= 0) p[flat_axis] = 0.5;
+            m.vertices.push_back(p);
+        }
+        const uint32_t b = uint32_t(3 * t);
+        m.triangles.push_back({b, b + 1, b + 2});
+    }
+    return m;
+}
+
+Aabb random_query(std::mt19937_64& rng, int flat_axis = -1) {
+    std::uniform_real_distribution<double> u(-0.1, 1.1);
+    std::uniform_real_distribution<double> ext(0.0, 0.3);
+    Aabb q;
+    q.lo = Vec3(u(rng), u(rng), u(rng));
+    q.hi = q.lo + Vec3(ext(rng), ext(rng), ext(rng));
+    if (flat_axis >= 0) q.lo[flat_axis] = q.hi[flat_axis] = 0.5;
+    return q;
+}
+
+std::set<uint32_t> brute_force(const TriMesh& m, const Aabb& q) {
+    std::set<uint32_t> out;
+    for (uint32_t t = 0; t < m.triangles.size(); ++t)
+        if (triangle_box(m, t).overlaps(q)) out.insert(t);
+    return out;
+}
+
+std::multiset<uint32_t> bvh_query(const Bvh& bvh, const Aabb& q) {
+    std::multiset<uint32_t> out;
+    EXPECT_TRUE(bvh.query(q, [&](uint32_t t) {
+        out.insert(t);
+        return true;
+    }));
+    return out;
+}
+
+void expect_same(const std::multiset<uint32_t>& got, const std::set<uint32_t>& want) {
+    // The same set, and no triangle reported twice.
+    EXPECT_EQ(std::set<uint32_t>(got.begin(), got.end()), want);
+    EXPECT_EQ(got.size(), want.size());
+}
+
+// Structural invariants: boxes nest, leaves hold 1..max_leaf triangles, order() is a
+// permutation, every triangle sits in a leaf whose box contains it, depth is bounded.
+void check_structure(const Bvh& bvh, const TriMesh& m, int max_leaf) {
+    const auto& nodes = bvh.nodes();
+    const size_t n = m.triangles.size();
+    if (n == 0) {
+        EXPECT_TRUE(nodes.empty());
+        EXPECT_EQ(bvh.depth(), 0);
+        return;
+    }
+    std::vector<uint32_t> sorted = bvh.order();
+    std::sort(sorted.begin(), sorted.end());
+    ASSERT_EQ(sorted.size(), n);
+    for (size_t i = 0; i < n; ++i) ASSERT_EQ(sorted[i], i);
+
+    std::vector<int> seen(n, 0);
+    int max_level = 0;
+    struct Item {
+        uint32_t node;
+        int level;
+    };
+    std::vector<Item> stack{{0, 1}};
+    while (!stack.empty()) {
+        const Item it = stack.back();
+        stack.pop_back();
+        ASSERT_LT(it.node, nodes.size());
+        const Bvh::Node& nd = nodes[it.node];
+        max_level = std::max(max_level, it.level);
+        if (nd.count > 0) {
+            ASSERT_LE(nd.count, uint32_t(max_leaf));
+            for (uint32_t i = 0; i < nd.count; ++i) {
+                const uint32_t t = bvh.order()[nd.first + i];
+                ++seen[t];
+                const Aabb b = triangle_box(m, t);
+                EXPECT_TRUE(glm::all(glm::lessThanEqual(nd.box.lo, b.lo)) &&
+                            glm::all(glm::lessThanEqual(b.hi, nd.box.hi)));
+            }
+        } else {
+            for (uint32_t c : {nd.first, nd.first + 1}) {
+                ASSERT_LT(c, nodes.size());
+                const Aabb& cb = nodes[c].box;
+                EXPECT_TRUE(glm::all(glm::lessThanEqual(nd.box.lo, cb.lo)) &&
+                            glm::all(glm::lessThanEqual(cb.hi, nd.box.hi)));
+                stack.push_back({c, it.level + 1});
+            }
+        }
+    }
+    for (size_t t = 0; t < n; ++t) EXPECT_EQ(seen[t], 1) << "triangle " << t;
+    EXPECT_EQ(max_level, bvh.depth());
+    EXPECT_LE(bvh.depth(), kBvhMaxDepth);
+    // Median split: depth is 1 + ceil(log2(n / max_leaf)) at most (plus one for rounding).
+    const double leaves = std::ceil(double(n) / max_leaf);
+    EXPECT_LE(bvh.depth(), 2 + int(std::ceil(std::log2(std::max(1.0, leaves)))));
+}
+
+TEST(Bvh, RandomSoupsMatchBruteForce) {
+    std::mt19937_64 rng(12345);
+    for (size_t n : {1u, 2u, 5u, 17u, 100u, 1000u, 5000u}) {
+        for (int leaf : {1, 2, 4, 8}) {
+            const TriMesh m = random_soup(n, rng);
+            const Bvh bvh(m, leaf);
+            check_structure(bvh, m, leaf);
+            for (int q = 0; q < 200; ++q) {
+                const Aabb box = random_query(rng);
+                expect_same(bvh_query(bvh, box), brute_force(m, box));
+            }
+        }
+    }
+}
+
+TEST(Bvh, QueriesThatTouchOnlyAFaceOrCornerCount) {
+    // Boxes that meet in a single plane or point overlap (closed boxes), as in Aabb::overlaps.
+    TriMesh m;
+    m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {2, 2, 2}, {3, 2, 2}, {2, 3, 3}};
+    m.triangles = {{0, 1, 2}, {3, 4, 5}};
+    const Bvh bvh(m, 1);
+    Aabb q;
+    q.lo = Vec3(1, 1, 0);
+    q.hi = Vec3(2, 2, 2);
+    expect_same(bvh_query(bvh, q), {0, 1});
+    q.lo = Vec3(1.0 + 1e-12, 1, 0);
+    expect_same(bvh_query(bvh, q), {1});
+}
+
+TEST(Bvh, EmptyMesh) {
+    const TriMesh m;
+    const Bvh bvh(m);
+    check_structure(bvh, m, 4);
+    Aabb q;
+    q.lo = Vec3(-1e9);
+    q.hi = Vec3(1e9);
+    EXPECT_TRUE(bvh_query(bvh, q).empty());
+    const Bvh default_constructed;
+    EXPECT_TRUE(default_constructed.nodes().empty());
+    EXPECT_TRUE(bvh_query(default_constructed, q).empty());
+}
+
+TEST(Bvh, SingleTriangle) {
+    TriMesh m;
+    m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    m.triangles = {{0, 1, 2}};
+    const Bvh bvh(m);
+    check_structure(bvh, m, 4);
+    ASSERT_EQ(bvh.nodes().size(), 1u);
+    EXPECT_EQ(bvh.depth(), 1);
+    Aabb hit;
+    hit.lo = Vec3(0.5, 0.5, -1);
+    hit.hi = Vec3(2, 2, 0);  // touches the flat box from below
+    expect_same(bvh_query(bvh, hit), {0});
+    Aabb miss;
+    miss.lo = Vec3(0.5, 0.5, 1e-9);
+    miss.hi = Vec3(2, 2, 1);
+    expect_same(bvh_query(bvh, miss), {});
+}
+
+TEST(Bvh, FlatTrianglesAndFlatQueries) {
+    std::mt19937_64 rng(777);
+    for (int axis = 0; axis < 3; ++axis) {
+        const TriMesh m = random_soup(2000, rng, axis);
+        const Bvh bvh(m, 4);
+        check_structure(bvh, m, 4);
+        for (int q = 0; q < 300; ++q) {
+            // Flat query on the triangles' plane, and ordinary queries through it.
+            const Aabb box = random_query(rng, q % 2 == 0 ? axis : -1);
+            expect_same(bvh_query(bvh, box), brute_force(m, box));
+        }
+        // A flat query just off the plane finds nothing.
+        Aabb off;
+        off.lo = Vec3(-1);
+        off.hi = Vec3(2);
+        off.lo[axis] = off.hi[axis] = 0.5 + 1e-9;
+        expect_same(bvh_query(bvh, off), {});
+    }
+}
+
+TEST(Bvh, CoincidentTrianglesStayShallow) {
+    // Every centroid equal: the median split still halves the set, by triangle index.
+    TriMesh m;
+    m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    for (int i = 0; i < 10000; ++i) m.triangles.push_back({0, 1, 2});
+    const Bvh bvh(m, 4);
+    check_structure(bvh, m, 4);
+    Aabb q;
+    q.lo = Vec3(0.2, 0.2, 0);
+    q.hi = Vec3(0.3, 0.3, 0);
+    EXPECT_EQ(bvh_query(bvh, q).size(), 10000u);
+}
+
+TEST(Bvh, EarlyStop) {
+    std::mt19937_64 rng(5);
+    const TriMesh m = random_soup(500, rng);
+    const Bvh bvh(m, 4);
+    Aabb all;
+    all.lo = Vec3(-1);
+    all.hi = Vec3(2);
+    int visits = 0;
+    EXPECT_FALSE(bvh.query(all, [&](uint32_t) { return ++visits < 7; }));
+    EXPECT_EQ(visits, 7);
+}
+
+TEST(Bvh, DeterministicBuild) {
+    std::mt19937_64 rng(99);
+    const TriMesh m = random_soup(3000, rng);
+    const Bvh a(m, 4), b(m, 4);
+    ASSERT_EQ(a.nodes().size(), b.nodes().size());
+    EXPECT_EQ(a.order(), b.order());
+    for (size_t i = 0; i < a.nodes().size(); ++i) {
+        EXPECT_EQ(a.nodes()[i].first, b.nodes()[i].first);
+        EXPECT_EQ(a.nodes()[i].count, b.nodes()[i].count);
+    }
+}
+
+TEST(Bvh, MillionTriangles) {
+    // A large mesh builds with a logarithmic depth and answers like brute force.
+    std::mt19937_64 rng(2024);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    TriMesh m;
+    const size_t n = 1u << 20;
+    m.vertices.reserve(3 * n);
+    m.triangles.reserve(n);
+    for (size_t t = 0; t < n; ++t) {
+        const Vec3 c(u(rng), u(rng), u(rng));
+        const uint32_t b = uint32_t(m.vertices.size());
+        m.vertices.push_back(c);
+        m.vertices.push_back(c + Vec3(1e-3, 0, 0));
+        m.vertices.push_back(c + Vec3(0, 1e-3, 1e-3));
+        m.triangles.push_back({b, b + 1, b + 2});
+    }
+    const Bvh bvh(m, 4);
+    EXPECT_LE(bvh.depth(), 20);  // 1 + log2(2^20 / 4) = 19
+    check_structure(bvh, m, 4);
+    for (int q = 0; q < 20; ++q) {
+        Aabb box = random_query(rng);
+        box.hi = box.lo + Vec3(0.02);
+        expect_same(bvh_query(bvh, box), brute_force(m, box));
+    }
+}
+
+}  // namespace
+}  // namespace sulcus
