@@ -1,0 +1,590 @@
+// Reader of the scene file `sulcus.scene/1` and its trajectory CSV (DESIGN.md, "Scene").
+//
+// Every fault becomes one line "file: place: what is wrong" (places in the JSON are JSON
+// pointers, places in the CSV are line numbers). The reader goes on after a fault so that one
+// run reports all of them; only an unknown `format` stops it, since the rest of a file of
+// another format cannot be read meaningfully.
+#include "sulcus/engine/scene_file.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <system_error>
+
+namespace sulcus {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+constexpr const char* kFormat = "sulcus.scene/1";
+constexpr double kSceneQuatTolerance = 1e-6;       // |q| - 1 allowed in the scene file
+constexpr double kTrajectoryQuatTolerance = 1e-3;  // |q| - 1 allowed in a trajectory row
+constexpr double kMaxRateHz = 100000.0;
+// A broken CSV with a million rows must not print a million lines.
+constexpr size_t kMaxTrajectoryErrors = 50;
+
+// Messages are single lines: control characters are written as escapes.
+std::string one_line(const std::string& s) {
+    std::string out;
+    out.reserve(s.size());
+    for (const char c : s) {
+        const auto u = static_cast<unsigned char>(c);
+        if (c == '\n') {
+            out += "\\n";
+        } else if (c == '\r') {
+            out += "\\r";
+        } else if (c == '\t') {
+            out += "\\t";
+        } else if (u < 0x20 || u == 0x7f) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\x%02x", u);
+            out += buf;
+        } else {
+            out += c;
+        }
+    }
+    return out;
+}
+
+// A value quoted in a message: single line, and not endless.
+std::string shown(const std::string& s) {
+    constexpr size_t kMax = 60;
+    std::string v = one_line(s);
+    if (v.size() > kMax) v = v.substr(0, kMax) + "...";
+    return "'" + v + "'";
+}
+
+// Shortest text that reads back as the same double.
+std::string num(double v) {
+    char buf[64];
+    const auto r = std::to_chars(buf, buf + sizeof buf, v);
+    return std::string(buf, r.ptr);
+}
+
+// One reference token of a JSON pointer (RFC 6901: '~' -> "~0", '/' -> "~1").
+std::string pointer_token(const std::string& key) {
+    std::string out;
+    for (const char c : key) {
+        if (c == '~')
+            out += "~0";
+        else if (c == '/')
+            out += "~1";
+        else
+            out += c;
+    }
+    return out;
+}
+
+struct Reporter {
+    std::string file;
+    std::vector<std::string>* errors;
+    std::vector<std::string>* warnings;
+
+    void error(const std::string& place, const std::string& what) const {
+        errors->push_back(one_line(file + ": " + place + ": " + what));
+    }
+    void warning(const std::string& place, const std::string& what) const {
+        warnings->push_back(one_line(file + ": " + place + ": " + what));
+    }
+};
+
+// Reads a whole file; on failure returns false with a one-line reason.
+bool read_text(const std::string& path, std::string& text, std::string& why) {
+    std::error_code ec;
+    const fs::file_status st = fs::status(path, ec);
+    if (ec || !fs::exists(st)) {
+        why = "file not found";
+        return false;
+    }
+    if (fs::is_directory(st)) {
+        why = "is a folder, not a file";
+        return false;
+    }
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+        why = "cannot be opened for reading";
+        return false;
+    }
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    if (in.bad()) {
+        why = "read error";
+        return false;
+    }
+    return true;
+}
+
+// Line and column (1-based, columns in characters of UTF-8 text) of the byte at `index`.
+void line_column(const std::string& text, size_t index, size_t& line, size_t& column) {
+    index = std::min(index, text.size());
+    line = 1;
+    column = 1;
+    for (size_t i = 0; i < index; ++i) {
+        const auto u = static_cast<unsigned char>(text[i]);
+        if (text[i] == '\n') {
+            ++line;
+            column = 1;
+        } else if ((u & 0xC0) != 0x80) {  // count characters, not UTF-8 continuation bytes
+            ++column;
+        }
+    }
+}
+
+// Byte index at which the JSON parser gives up: a second, DOM-less pass whose only job is
+// to catch the parser's position (json::parse's exceptions do not all carry one).
+size_t parse_stop(const std::string& text) {
+    struct Locator : nlohmann::json_sax<json> {
+        size_t stop = 0;
+        bool null() override { return true; }
+        bool boolean(bool) override { return true; }
+        bool number_integer(number_integer_t) override { return true; }
+        bool number_unsigned(number_unsigned_t) override { return true; }
+        bool number_float(number_float_t, const string_t&) override { return true; }
+        bool string(string_t&) override { return true; }
+        bool binary(binary_t&) override { return true; }
+        bool start_object(std::size_t) override { return true; }
+        bool key(string_t&) override { return true; }
+        bool end_object() override { return true; }
+        bool start_array(std::size_t) override { return true; }
+        bool end_array() override { return true; }
+        bool parse_error(std::size_t position, const std::string&, const json::exception&) override {
+            stop = position;  // 1-based index of the last character read (size + 1 at the end)
+            return false;
+        }
+    } locator;
+    json::sax_parse(text, &locator, json::input_format_t::json, /*strict=*/true, /*ignore_comments=*/false);
+    return locator.stop > 0 ? locator.stop - 1 : 0;
+}
+
+// nlohmann's message without its "[json.exception...] parse error at ..." prefix.
+std::string parse_error_text(const std::string& what) {
+    size_t at = what.find("column ");
+    if (at != std::string::npos) {
+        at = what.find(": ", at);
+        if (at != std::string::npos) return what.substr(at + 2);
+    }
+    at = what.find("] ");
+    return at == std::string::npos ? what : what.substr(at + 2);
+}
+
+// Mesh and trajectory paths are relative to the scene file's folder.
+std::string resolve(const std::string& scene_path, const std::string& relative) {
+    const fs::path rel(relative);
+    if (rel.is_absolute()) return rel.lexically_normal().string();
+    const fs::path dir = fs::path(scene_path).parent_path();
+    return (dir / rel).lexically_normal().string();
+}
+
+void warn_unknown_keys(const Reporter& r, const json& obj, const std::string& place,
+                       std::initializer_list<const char*> known) {
+    for (auto it = obj.begin(); it != obj.end(); ++it) {
+        const bool ok = std::any_of(known.begin(), known.end(), [&](const char* k) { return it.key() == k; });
+        if (!ok) r.warning(place + "/" + pointer_token(it.key()), "unknown key (ignored)");
+    }
+}
+
+bool finite_number(const json& v, double& out) {
+    if (!v.is_number()) return false;
+    out = v.get<double>();
+    return std::isfinite(out);
+}
+
+// A JSON array of exactly n finite numbers.
+bool read_numbers(const Reporter& r, const json& v, const std::string& place, size_t n, double* out) {
+    if (!v.is_array() || v.size() != n) {
+        r.error(place, "expected an array of " + std::to_string(n) + " numbers");
+        return false;
+    }
+    bool ok = true;
+    for (size_t i = 0; i < n; ++i) {
+        if (!finite_number(v[i], out[i])) {
+            r.error(place + "/" + std::to_string(i), "expected a finite number, found " + shown(v[i].dump()));
+            ok = false;
+        }
+    }
+    return ok;
+}
+
+bool read_string(const Reporter& r, const json& obj, const std::string& place, const char* key,
+                 std::string& out) {
+    const std::string here = place + "/" + key;
+    const auto it = obj.find(key);
+    if (it == obj.end()) {
+        r.error(here, "missing");
+        return false;
+    }
+    if (!it->is_string() || it->get_ref<const std::string&>().empty()) {
+        r.error(here, "expected a non-empty string");
+        return false;
+    }
+    out = it->get<std::string>();
+    return true;
+}
+
+// Checks that the referenced file exists before handing it to a loader, so that a missing
+// file is reported at its place in the scene.
+bool check_file(const Reporter& r, const std::string& place, const std::string& resolved) {
+    std::error_code ec;
+    const fs::file_status st = fs::status(resolved, ec);
+    if (ec || !fs::exists(st)) {
+        r.error(place, "file not found: " + resolved);
+        return false;
+    }
+    if (fs::is_directory(st)) {
+        r.error(place, "is a folder, not a file: " + resolved);
+        return false;
+    }
+    return true;
+}
+
+// name + mesh (+ pose for objects); loads the mesh.
+void read_body(const Reporter& r, const json& v, const std::string& place, bool has_pose, SceneObject& out) {
+    if (!v.is_object()) {
+        r.error(place, "expected an object with \"name\" and \"mesh\"");
+        return;
+    }
+    if (has_pose)
+        warn_unknown_keys(r, v, place, {"name", "mesh", "position", "orientation"});
+    else
+        warn_unknown_keys(r, v, place, {"name", "mesh"});
+    read_string(r, v, place, "name", out.name);
+
+    if (has_pose) {
+        if (const auto it = v.find("position"); it != v.end()) {
+            double p[3];
+            if (read_numbers(r, *it, place + "/position", 3, p)) out.pose.position = Vec3(p[0], p[1], p[2]);
+        }
+        if (const auto it = v.find("orientation"); it != v.end()) {
+            double q[4];
+            const std::string here = place + "/orientation";
+            if (read_numbers(r, *it, here, 4, q)) {
+                const double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+                if (!(std::abs(len - 1.0) <= kSceneQuatTolerance)) {
+                    r.error(here, "quaternion [w, x, y, z] has length " + num(len) + " (must be unit within " +
+                                      num(kSceneQuatTolerance) + ")");
+                } else {
+                    out.pose.orientation = Quat(q[0] / len, q[1] / len, q[2] / len, q[3] / len);
+                }
+            }
+        }
+    }
+
+    std::string mesh;
+    if (read_string(r, v, place, "mesh", mesh)) {
+        out.mesh_path = resolve(r.file, mesh);
+        if (check_file(r, place + "/mesh", out.mesh_path)) {
+            MeshLoad load = load_mesh(out.mesh_path);
+            if (load.ok())
+                out.mesh = std::move(load.mesh);
+            else
+                r.errors->push_back(one_line(load.error));  // already "path: place: what"
+        }
+    }
+}
+
+void read_haptic(const Reporter& r, const json& v, HapticSettings& h) {
+    const std::string place = "/haptic";
+    if (!v.is_object()) {
+        r.error(place, "expected an object");
+        return;
+    }
+    struct Field {
+        const char* key;
+        double* value;
+    };
+    const Field fields[] = {
+        {"stiffness_N_per_m", &h.stiffness_N_per_m},
+        {"rotational_stiffness_Nm_per_rad", &h.rotational_stiffness_Nm_per_rad},
+        {"weight_translational", &h.weight_translational},
+        {"weight_rotational", &h.weight_rotational},
+    };
+    for (auto it = v.begin(); it != v.end(); ++it) {
+        const std::string here = place + "/" + pointer_token(it.key());
+        const Field* f = nullptr;
+        for (const Field& candidate : fields)
+            if (it.key() == candidate.key) f = &candidate;
+        if (!f) {
+            r.warning(here, "unknown key (ignored)");
+            continue;
+        }
+        double x = 0.0;
+        if (!finite_number(*it, x) || !(x > 0.0))
+            r.error(here, "expected a positive finite number, found " + shown(it->dump()));
+        else
+            *f->value = x;
+    }
+}
+
+std::vector<std::string> split_fields(const std::string& line) {
+    std::vector<std::string> out;
+    size_t start = 0;
+    while (true) {
+        const size_t comma = line.find(',', start);
+        out.push_back(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+        if (comma == std::string::npos) break;
+        start = comma + 1;
+    }
+    return out;
+}
+
+std::string trim(const std::string& s) {
+    const char* ws = " \t\r\f\v";
+    const size_t a = s.find_first_not_of(ws);
+    if (a == std::string::npos) return {};
+    const size_t b = s.find_last_not_of(ws);
+    return s.substr(a, b - a + 1);
+}
+
+// A whole field as a finite double (std::from_chars: locale-independent, no partial parses).
+bool parse_finite(const std::string& field, double& out) {
+    if (field.empty()) return false;
+    const char* first = field.data();
+    const char* last = first + field.size();
+    if (*first == '+') ++first;  // from_chars rejects a leading '+', people write it
+    const auto r = std::from_chars(first, last, out);
+    return r.ec == std::errc() && r.ptr == last && std::isfinite(out);
+}
+
+double qdot(const Quat& a, const Quat& b) { return a.w * b.w + a.x * b.x + a.y * b.y + a.z * b.z; }
+
+// Spherical linear interpolation along the shorter arc, normalised. The angle comes from
+// atan2 of |a-b| and |a+b|, which stays accurate for small angles where acos(dot) does not.
+Quat slerp_short(const Quat& a, Quat b, double u) {
+    if (qdot(a, b) < 0.0) b = -b;
+    const Quat d = a - b;
+    const Quat s = a + b;
+    const double half = std::atan2(std::sqrt(qdot(d, d)), std::sqrt(qdot(s, s)));  // theta / 2
+    const double theta = 2.0 * half;
+    Quat q;
+    if (theta < 1e-9) {
+        q = a * (1.0 - u) + b * u;  // sin(x) ~ x: slerp and lerp agree to rounding here
+    } else {
+        const double sin_theta = std::sin(theta);
+        q = a * (std::sin((1.0 - u) * theta) / sin_theta) + b * (std::sin(u * theta) / sin_theta);
+    }
+    return glm::normalize(q);
+}
+
+}  // namespace
+
+std::vector<TrajectorySample> load_trajectory(const std::string& path, std::vector<std::string>& errors) {
+    static const char* const kColumns[8] = {"t", "x", "y", "z", "qw", "qx", "qy", "qz"};
+    std::vector<TrajectorySample> rows;
+    const size_t errors_before = errors.size();
+    size_t suppressed = 0;
+    auto fault = [&](size_t line, const std::string& what) {
+        if (errors.size() - errors_before < kMaxTrajectoryErrors)
+            errors.push_back(one_line(path + ": line " + std::to_string(line) + ": " + what));
+        else
+            ++suppressed;
+    };
+
+    std::string text, why;
+    if (!read_text(path, text, why)) {
+        errors.push_back(one_line(path + ": " + why));
+        return {};
+    }
+    if (text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.erase(0, 3);  // UTF-8 byte-order mark
+
+    std::istringstream in(text);
+    std::string line;
+    size_t line_no = 0;
+    bool header_seen = false;
+    size_t data_rows = 0;
+    bool have_previous = false;
+    TrajectorySample previous;
+    while (std::getline(in, line)) {
+        ++line_no;
+        if (trim(line).empty()) continue;  // blank lines (often at the end) carry nothing
+        const std::vector<std::string> fields = split_fields(line);
+
+        if (!header_seen) {
+            header_seen = true;
+            bool ok = fields.size() == 8;
+            for (size_t i = 0; ok && i < 8; ++i) ok = trim(fields[i]) == kColumns[i];
+            if (!ok) {
+                fault(line_no, "header is " + shown(trim(line)) + " (expected t,x,y,z,qw,qx,qy,qz)");
+                // Without the right columns the rows cannot be read meaningfully.
+                break;
+            }
+            continue;
+        }
+
+        ++data_rows;
+        if (fields.size() != 8) {
+            fault(line_no, "expected 8 values, found " + std::to_string(fields.size()));
+            continue;
+        }
+        double v[8];
+        bool row_ok = true;
+        for (size_t i = 0; i < 8; ++i) {
+            const std::string f = trim(fields[i]);
+            if (!parse_finite(f, v[i])) {
+                fault(line_no, std::string("column ") + kColumns[i] + ": not a number (" + shown(f) + ")");
+                row_ok = false;
+            }
+        }
+        if (!row_ok) continue;
+
+        TrajectorySample s;
+        s.t = v[0];
+        s.pose.position = Vec3(v[1], v[2], v[3]);
+        if (have_previous && !(s.t > previous.t)) {
+            fault(line_no, "time " + num(s.t) + " is not after the previous " + num(previous.t));
+            row_ok = false;
+        }
+        const double len = std::sqrt(v[4] * v[4] + v[5] * v[5] + v[6] * v[6] + v[7] * v[7]);
+        if (!(std::abs(len - 1.0) <= kTrajectoryQuatTolerance)) {
+            fault(line_no, "quaternion (qw,qx,qy,qz) has length " + num(len) + " (must be unit within " +
+                               num(kTrajectoryQuatTolerance) + ")");
+            row_ok = false;
+        }
+        if (!row_ok) continue;
+        s.pose.orientation = Quat(v[4] / len, v[5] / len, v[6] / len, v[7] / len);
+        // q and -q are the same rotation; keep neighbours in the same hemisphere so that
+        // interpolation between rows takes the short way.
+        if (have_previous && qdot(s.pose.orientation, previous.pose.orientation) < 0.0)
+            s.pose.orientation = -s.pose.orientation;
+        rows.push_back(s);
+        previous = s;
+        have_previous = true;
+    }
+
+    if (!header_seen) {
+        fault(1, "empty file (expected the header t,x,y,z,qw,qx,qy,qz and at least 2 rows)");
+    } else if (errors.size() == errors_before && data_rows < 2) {
+        errors.push_back(one_line(path + ": line " + std::to_string(line_no) + ": at least 2 rows needed, found " +
+                                  std::to_string(data_rows)));
+    }
+    if (suppressed > 0)
+        errors.push_back(one_line(path + ": " + std::to_string(suppressed) + " more faults not shown"));
+    if (errors.size() != errors_before) return {};
+    return rows;
+}
+
+SceneLoad load_scene(const std::string& path) {
+    SceneLoad result;
+    SceneFile& scene = result.scene;
+    scene.path = path;
+    scene.name = fs::path(path).stem().string();
+    const Reporter r{path, &result.errors, &scene.warnings};
+
+    std::string text, why;
+    if (!read_text(path, text, why)) {
+        result.errors.push_back(one_line(path + ": " + why));
+        return result;
+    }
+
+    json doc;
+    try {
+        doc = json::parse(text, nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/false);
+    } catch (const json::exception& e) {
+        // Parse errors and number overflow (1e999) both land here; the locating pass finds
+        // where the parser stopped.
+        size_t line = 0, column = 0;
+        line_column(text, parse_stop(text), line, column);
+        result.errors.push_back(one_line(path + ": line " + std::to_string(line) + ", column " +
+                                         std::to_string(column) + ": " + parse_error_text(e.what())));
+        return result;
+    }
+
+    if (!doc.is_object()) {
+        r.error("(top level)", "expected a JSON object");
+        return result;
+    }
+
+    if (const auto it = doc.find("format"); it == doc.end()) {
+        r.error("/format", std::string("missing (expected ") + kFormat + ")");
+    } else if (!it->is_string() || it->get_ref<const std::string&>() != kFormat) {
+        const std::string found = it->is_string() ? it->get<std::string>() : it->dump();
+        r.error("/format", "unknown format " + shown(found) + " (expected " + kFormat + ")");
+        return result;
+    }
+    warn_unknown_keys(r, doc, "", {"format", "objects", "tool", "haptic", "trajectory", "rate_hz"});
+
+    // Objects: each loaded, names unique.
+    if (const auto it = doc.find("objects"); it == doc.end()) {
+        r.error("/objects", "missing (expected a non-empty array of objects)");
+    } else if (!it->is_array() || it->empty()) {
+        r.error("/objects", "expected a non-empty array of objects");
+    } else {
+        for (size_t i = 0; i < it->size(); ++i) {
+            const std::string place = "/objects/" + std::to_string(i);
+            SceneObject obj;
+            read_body(r, (*it)[i], place, /*has_pose=*/true, obj);
+            for (size_t j = 0; j < scene.objects.size(); ++j) {
+                if (!obj.name.empty() && scene.objects[j].name == obj.name)
+                    r.error(place + "/name", "duplicate name " + shown(obj.name));
+            }
+            scene.objects.push_back(std::move(obj));
+        }
+    }
+
+    if (const auto it = doc.find("tool"); it == doc.end())
+        r.error("/tool", "missing (expected an object with \"name\" and \"mesh\")");
+    else
+        read_body(r, *it, "/tool", /*has_pose=*/false, scene.tool);
+
+    if (const auto it = doc.find("haptic"); it != doc.end()) read_haptic(r, *it, scene.haptic);
+
+    if (const auto it = doc.find("rate_hz"); it != doc.end()) {
+        double rate = 0.0;
+        if (!finite_number(*it, rate) || !(rate > 0.0) || rate > kMaxRateHz)
+            r.error("/rate_hz", "expected a number in (0, " + num(kMaxRateHz) + "], found " + shown(it->dump()));
+        else
+            scene.rate_hz = rate;
+    }
+
+    std::string trajectory;
+    if (read_string(r, doc, "", "trajectory", trajectory)) {
+        scene.trajectory_path = resolve(path, trajectory);
+        if (check_file(r, "/trajectory", scene.trajectory_path))
+            scene.trajectory = load_trajectory(scene.trajectory_path, result.errors);
+    }
+    return result;
+}
+
+Pose sample_trajectory(const std::vector<TrajectorySample>& trajectory, double t, size_t& cursor) {
+    if (trajectory.empty()) return Pose{};
+    const size_t n = trajectory.size();
+    // Clamped at both ends; NaN counts as before the start.
+    if (!(t > trajectory.front().t)) {
+        cursor = 0;
+        return trajectory.front().pose;
+    }
+    if (t >= trajectory.back().t) {
+        cursor = n - 1;
+        return trajectory.back().pose;
+    }
+    // Now trajectory[0].t < t < trajectory[n-1].t: find i with t_i <= t < t_{i+1}.
+    auto brackets = [&](size_t i) { return i + 1 < n && trajectory[i].t <= t && t < trajectory[i + 1].t; };
+    size_t i = cursor;
+    if (!brackets(i)) {
+        if (brackets(i + 1)) {
+            i = i + 1;  // the usual case when sampling forward at a rate above the rows'
+        } else {
+            const auto after = std::upper_bound(trajectory.begin(), trajectory.end(), t,
+                                                [](double v, const TrajectorySample& s) { return v < s.t; });
+            i = static_cast<size_t>(after - trajectory.begin()) - 1;
+        }
+    }
+    cursor = i;
+
+    const TrajectorySample& a = trajectory[i];
+    const TrajectorySample& b = trajectory[i + 1];
+    if (t == a.t) return a.pose;
+    const double u = (t - a.t) / (b.t - a.t);
+    Pose p;
+    p.position = a.pose.position + (b.pose.position - a.pose.position) * u;
+    p.orientation = slerp_short(a.pose.orientation, b.pose.orientation, u);
+    return p;
+}
+
+}  // namespace sulcus

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Builds Sulcus and runs it. With a display and the desktop app built, starts the app with the
+# given arguments; otherwise runs every paper scene headless (content/assets/scenes/paper/*.json)
+# into out/paper/<scene>/ with plots, printing each run's summary line. Exits non-zero when any
+# run does.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+tools/setup.sh
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo
+cmake --build build -j"$(nproc)"
+
+if [ -n "${DISPLAY:-}" ] && [ -x build/bin/sulcus ]; then
+  exec build/bin/sulcus "$@"
+fi
+
+if [ $# -gt 0 ]; then
+  echo "run: no display (or no desktop app): arguments ignored, running the paper scenes headless" >&2
+fi
+
+shopt -s nullglob
+scenes=(content/assets/scenes/paper/*.json)
+if [ ${#scenes[@]} -eq 0 ]; then
+  echo "run: no scenes in content/assets/scenes/paper/" >&2
+  exit 2
+fi
+
+worst=0
+for scene in "${scenes[@]}"; do
+  name=$(basename "$scene" .json)
+  status=0
+  build/bin/sulcus-cli run "$scene" --out "out/paper/$name" --plot || status=$?
+  if [ "$status" -ne 0 ]; then
+    echo "run: $scene: sulcus-cli exited with status $status" >&2
+    if [ "$status" -gt "$worst" ]; then worst=$status; fi
+  fi
+done
+exit "$worst"
