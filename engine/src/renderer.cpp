@@ -28,6 +28,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <memory>
 
 namespace sulcus {
@@ -269,6 +270,19 @@ void add_disjunction(const Model& model, Workspace& w, uint16_t object, uint32_t
     }
 }
 
+bool in_vertex_cone(const ModelObject& obj, uint32_t v, const Vec3& p) {
+    const auto& topo = obj.topology;
+    const Vec3& pv = obj.mesh.vertices[v];
+    const Vec3 d = p - pv;
+    for (uint32_t i = topo.vertex_edge_offsets[v]; i < topo.vertex_edge_offsets[v + 1]; ++i) {
+        const MeshEdge& e = topo.edges[topo.vertex_edges[i]];
+        const uint32_t other = e.v[0] == v ? e.v[1] : e.v[0];
+        const Vec3 dir = obj.mesh.vertices[other] - pv;
+        if (glm::dot(d, dir) > 1e-12 * glm::length(dir)) return false;
+    }
+    return true;
+}
+
 // gather: the principal-contact atoms of every feature pair within `reach`.
 void gather_atoms(const Model& model, double reach, Workspace& w) {
     const ModelTool& tool = model.tool;
@@ -320,7 +334,16 @@ void gather_atoms(const Model& model, double reach, Workspace& w) {
         } else if (k.type == 1) {
             const MeshEdge& e = obj.topology.edges[k.id];
             if (e.convexity == Convexity::Flat) {
-                add_disjunction(model, w, k.object, k.a, wa, e.tri.data(), 1);
+                // A flat edge is no feature of the surface: a point beyond one of its triangles
+                // lies over the other (whose face holds it) or beyond both, where another edge
+                // or vertex is the real feature. Only a point right over the edge, which both
+                // triangles report as an edge point, is held by their common plane.
+                const Vec3& v0 = obj.mesh.vertices[e.v[0]];
+                const Vec3 ev = obj.mesh.vertices[e.v[1]] - v0;
+                const double s = glm::clamp(glm::dot(wa - v0, ev) / glm::dot(ev, ev), 0.0, 1.0);
+                const Vec3 off = wa - (v0 + s * ev);
+                const double h = signed_to_plane(obj, e.tri[0], wa);
+                if (glm::dot(off, off) - h * h <= 1e-18 && h >= -kBackFace) add_atom(w, vf_atom(k.object, k.a, e.tri[0]));
             } else if (e.convexity == Convexity::Concave) {
                 // eq. 8: both faces of a concave edge hold at once (Types 3 and 5).
                 for (uint32_t tri : e.tri)
@@ -330,6 +353,10 @@ void gather_atoms(const Model& model, double reach, Workspace& w) {
             }
         } else {
             const auto& topo = obj.topology;
+            // The vertex is the feature only for points in its Voronoi cone: no incident edge
+            // leans towards the point (else the point is over that edge or a face beyond it,
+            // which another triangle reports).
+            if (!in_vertex_cone(obj, k.id, wa)) continue;
             const uint32_t* tris = topo.vertex_triangles.data() + topo.vertex_triangle_offsets[k.id];
             const int count = static_cast<int>(topo.vertex_triangle_offsets[k.id + 1] - topo.vertex_triangle_offsets[k.id]);
             if (topo.vertex_convexity[k.id] == Convexity::Concave) {
@@ -464,9 +491,46 @@ void add_separating_plane(const Model& model, const NearTri& nt, double reach, W
     }
 }
 
+// The local-solution box of eq. 5 about the last graphic pose (x = 0). The paper's box holds each
+// coordinate between 0 and the haptic pose's. The default keeps only the side that stops a
+// coordinate moving away from the haptic pose; on the far side it adds the bound every solution
+// meets anyway (its energy is at most that of x = 0, which is feasible), so the reach of the step
+// stays finite.
+//
+// The force-continuity box: with the haptic tool moving dh this tick, a translation x changes the
+// offset graphic - haptic by x - dh; holding each |x_j - dh_j| <= |dh_j| + c with c = margin/sqrt(3)
+// bounds |x - dh| by |dh| + margin (Minkowski), hence the force change by K_t (|dh| + margin).
+// x = 0 (staying) is always inside.
+void local_box(const RendererSettings& S, const double target[6], const Vec3& haptic_motion, bool limit_rate,
+               double lower[6], double upper[6]) {
+    const HapticSettings& h = S.haptic;
+    double e0 = 0.0;
+    for (int j = 0; j < 6; ++j) e0 += 0.5 * (j < 3 ? h.weight_translational : h.weight_rotational) * target[j] * target[j];
+    for (int j = 0; j < 6; ++j) {
+        const double t = target[j];
+        double slack = 0.0;
+        if (S.local_box == LocalBox::TowardHaptic)
+            slack = std::sqrt(2.0 * e0 / (j < 3 ? h.weight_translational : h.weight_rotational));
+        lower[j] = t < 0.0 ? t - slack : 0.0;
+        upper[j] = t > 0.0 ? t + slack : 0.0;
+        if (limit_rate && j < 3 && S.force_step_margin_m > 0.0) {
+            const double dh = haptic_motion[j];
+            const double c = S.force_step_margin_m / std::sqrt(3.0);
+            lower[j] = std::max(lower[j], dh - std::abs(dh) - c);
+            upper[j] = std::min(upper[j], dh + std::abs(dh) + c);
+        }
+    }
+}
+
+bool inside_box(const double x[6], const double lower[6], const double upper[6]) {
+    for (int j = 0; j < 6; ++j)
+        if (x[j] < lower[j] || x[j] > upper[j]) return false;
+    return true;
+}
+
 // solve: one candidate set by sequential linearization (re-linearize until exact).
-CandidateResult solve_candidate(const Model& model, const Pose& base, const double target[6], double reach,
-                                Workspace& w, StepStats& stats) {
+CandidateResult solve_candidate(const Model& model, const Pose& base, const double target[6], const double lower[6],
+                                const double upper[6], double reach, Workspace& w, StepStats& stats) {
     const RendererSettings& S = model.settings;
     const HapticSettings& h = S.haptic;
     CandidateResult r;
@@ -474,9 +538,8 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const doub
     for (int j = 0; j < 6; ++j) {
         P.weight[j] = j < 3 ? h.weight_translational : h.weight_rotational;
         P.target[j] = target[j];
-        // eq. 5: each coordinate between the last graphic pose (0) and the haptic pose.
-        P.lower[j] = std::min(0.0, target[j]);
-        P.upper[j] = std::max(0.0, target[j]);
+        P.lower[j] = lower[j];
+        P.upper[j] = upper[j];
     }
     double x[6] = {0, 0, 0, 0, 0, 0};
     w.warm.count = 0;
@@ -554,25 +617,96 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const doub
     return r;
 }
 
-// Contact regions: connected groups of the triangles touched by the active atoms.
-int count_regions(const Model& model, const Atom* atoms, int count) {
-    // Small sets: a quadratic union-find over the touched triangles is cheap.
-    constexpr int kMax = 64;
-    uint16_t obj[kMax];
-    uint32_t tri[kMax];
+// The world point where an active atom touches.
+Vec3 contact_point(const Model& model, const Atom& a, const ToolPoseAt& t) {
+    const ModelObject& o = model.objects[a.object];
+    switch (a.kind) {
+        case AtomKind::VertexFace:
+        case AtomKind::FixedAxis: return t.p + t.R * model.tool.mesh.vertices[a.tool_vertex];
+        case AtomKind::FaceVertex: return o.mesh.vertices[a.object_vertex];
+        case AtomKind::EdgeEdge: {
+            const auto& te = model.tool.edges[a.tool_edge];
+            const MeshEdge& e = o.topology.edges[a.object_edge];
+            const Vec3 a0 = t.p + t.R * model.tool.mesh.vertices[te[0]];
+            const Vec3 a1 = t.p + t.R * model.tool.mesh.vertices[te[1]];
+            const Vec3& v0 = o.mesh.vertices[e.v[0]];
+            const Vec3& v1 = o.mesh.vertices[e.v[1]];
+            const SegmentClosest c = closest_segments(a0, a1, v0, v1);
+            return v0 + c.t * (v1 - v0);
+        }
+    }
+    return t.p;
+}
+
+// solve + select: every candidate set within the box; the feasible one of least energy wins
+// (ties keep the lower index, for determinism). Leaves the winner's atoms in w.best.
+bool solve_candidates(const Model& model, const Pose& base, const double target[6], const double lower[6],
+                      const double upper[6], double reach, Workspace& w, StepStats& stats, double x_out[6]) {
+    const int candidates = std::min(1 + w.alt_count, std::max(1, model.settings.max_candidates));
+    double best_energy = 1e300;
+    bool found = false;
+    for (int c = 0; c < candidates; ++c) {
+        w.cand_count = w.atom_count;
+        std::copy(w.atoms, w.atoms + w.atom_count, w.cand);
+        if (c > 0) w.cand[w.alts[c - 1].replace] = w.alts[c - 1].atom;
+        const CandidateResult cr = solve_candidate(model, base, target, lower, upper, reach, w, stats);
+        ++stats.candidates;
+        if (cr.ok && cr.energy < best_energy) {
+            best_energy = cr.energy;
+            found = true;
+            for (int j = 0; j < 6; ++j) x_out[j] = cr.x[j];
+            stats.relinearizations = cr.relinearizations;
+            stats.constraint_error_m = cr.error;
+            w.best_count = w.cand_count;
+            std::copy(w.cand, w.cand + w.cand_count, w.best);
+        }
+    }
+    if (found) stats.atoms = w.best_count;
+    return found;
+}
+
+bool touches(const Model& model, const Pose& base, const double x[6], const Workspace& w) {
+    const ToolPoseAt at = tool_pose_at(base, x);
+    for (int i = 0; i < w.best_count; ++i)
+        if (evaluate_atom(model, w.best[i], at, nullptr) <= 2.0 * model.settings.constraint_tol_m) return true;
+    return false;
+}
+
+// Whether world point m lies on the contact: on the tool's surface and on an object's surface,
+// both within `tol`.
+bool on_contact(const Model& model, const Workspace& w, const Vec3& m, double tol) {
+    double inside = -1e300;
+    for (size_t f = 0; f < model.tool.face_normals.size(); ++f)
+        inside = std::max(inside, glm::dot(w.face_n[f], m) - w.face_d[f]);
+    if (std::abs(inside) > tol) return false;
+    Aabb box;
+    box.grow(m);
+    box.inflate(tol);
+    bool hit = false;
+    for (const ModelObject& o : model.objects) {
+        o.bvh.query(box, [&](uint32_t tri) {
+            const auto& t = o.mesh.triangles[tri];
+            if (closest_on_triangle(m, o.mesh.vertices[t[0]], o.mesh.vertices[t[1]], o.mesh.vertices[t[2]]).distance <= tol)
+                hit = true;
+            return !hit;
+        });
+        if (hit) return true;
+    }
+    return false;
+}
+
+// Contact regions: two contacts belong to one region when the midpoint of their contact points
+// is itself on the contact (a face lying on a face is one region; a tip on a floor and a shaft on
+// an edge are two). Needs the tool planes of the solution pose in the workspace.
+int count_regions(const Model& model, const Workspace& w, const Atom* atoms, int count, const ToolPoseAt& at,
+                  double tol) {
+    constexpr int kMax = kMaxActiveAtoms;
+    Vec3 point[kMax];
     int parent[kMax];
-    int n = 0;
-    for (int i = 0; i < count && n < kMax; ++i) {
-        const Atom& a = atoms[i];
-        const ModelObject& o = model.objects[a.object];
-        uint32_t t = 0;
-        if (a.kind == AtomKind::VertexFace) t = a.object_triangle;
-        else if (a.kind == AtomKind::EdgeEdge) t = o.topology.edges[a.object_edge].tri[0];
-        else t = o.topology.vertex_triangles[o.topology.vertex_triangle_offsets[a.object_vertex]];
-        obj[n] = a.object;
-        tri[n] = t;
-        parent[n] = n;
-        ++n;
+    const int n = std::min(count, kMax);
+    for (int i = 0; i < n; ++i) {
+        point[i] = contact_point(model, atoms[i], at);
+        parent[i] = i;
     }
     auto find = [&](int i) {
         while (parent[i] != i) i = parent[i] = parent[parent[i]];
@@ -580,14 +714,9 @@ int count_regions(const Model& model, const Atom* atoms, int count) {
     };
     for (int i = 0; i < n; ++i) {
         for (int j = i + 1; j < n; ++j) {
-            if (obj[i] != obj[j]) continue;
-            const auto& ti = model.objects[obj[i]].mesh.triangles[tri[i]];
-            const auto& tj = model.objects[obj[j]].mesh.triangles[tri[j]];
-            bool share = false;
-            for (int a = 0; a < 3 && !share; ++a)
-                for (int b = 0; b < 3; ++b)
-                    if (ti[a] == tj[b]) share = true;
-            if (share || tri[i] == tri[j]) parent[find(i)] = find(j);
+            if (find(i) == find(j)) continue;
+            const Vec3 m = 0.5 * (point[i] + point[j]);
+            if (glm::length(point[i] - point[j]) <= tol || on_contact(model, w, m, tol)) parent[find(i)] = find(j);
         }
     }
     int regions = 0;
@@ -640,20 +769,28 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     set_tool_planes(model, base.orientation, base.position, w);
 
     double scale = 1.0;
-    double target[6];
+    double target[6], lower[6], upper[6];
     double reach = 0.0;
     bool solved = false;
     double x_sol[6] = {0, 0, 0, 0, 0, 0};
     bool free_motion = false;
     auto t_detect_end = t_start, t_gather_end = t_start, t_solve_end = t_start;
+    (void)t_solve_end;
     double stage_detect = 0, stage_gather = 0, stage_solve = 0;
 
     for (int attempt = 0; attempt <= kMaxHalvings && !solved; ++attempt) {
         auto t0 = Clock::now();
         for (int j = 0; j < 6; ++j) target[j] = scale * xh[j];
-        const double move = std::sqrt(target[0] * target[0] + target[1] * target[1] + target[2] * target[2]);
-        const double turn = std::sqrt(target[3] * target[3] + target[4] * target[4] + target[5] * target[5]);
-        // No tool point moves further than this within the eq. 5 box.
+        // The box of eq. 5 sets the reach; the force-continuity limit narrows it while in contact.
+        const Vec3 haptic_motion = haptic.position - state.last_haptic.position;
+        local_box(S, target, haptic_motion, false, lower, upper);
+        double move2 = 0.0, turn2 = 0.0;
+        for (int j = 0; j < 6; ++j) {
+            const double m = std::max(std::abs(lower[j]), std::abs(upper[j]));
+            (j < 3 ? move2 : turn2) += m * m;
+        }
+        const double move = std::sqrt(move2), turn = std::sqrt(turn2);
+        // No tool point moves further than this within the box.
         reach = move + turn * (model.tool.radius_m + move) + S.contact_distance_m + 10.0 * S.constraint_tol_m;
         if (!gather_near(model, w.tool_world, reach, w)) {
             scale *= 0.5;
@@ -661,8 +798,9 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             continue;
         }
         res.stats.triangles_near = w.near_count;
-        if (w.near_count == 0 ||
-            (state.active_count == 0 && motion_is_free(model, base, target, S.contact_distance_m, w))) {
+        if (inside_box(target, lower, upper) &&
+            (w.near_count == 0 ||
+             (state.active_count == 0 && motion_is_free(model, base, target, S.contact_distance_m, w)))) {
             free_motion = true;
             solved = true;
             for (int j = 0; j < 6; ++j) x_sol[j] = target[j];
@@ -678,35 +816,22 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
         stage_gather += micros(t_detect_end, t_gather_end);
         res.stats.pairs_in_contact = w.atom_count;
 
-        // ---- solve ---- candidate 0 is the default resolution; each alternative swaps one atom.
-        const int candidates = std::min(1 + w.alt_count, std::max(1, S.max_candidates));
-        double best_energy = 1e300;
-        int best_index = -1;
-        for (int c = 0; c < candidates; ++c) {
-            w.cand_count = w.atom_count;
-            std::copy(w.atoms, w.atoms + w.atom_count, w.cand);
-            if (c > 0) w.cand[w.alts[c - 1].replace] = w.alts[c - 1].atom;
-            const CandidateResult cr = solve_candidate(model, base, target, reach, w, res.stats);
-            ++res.stats.candidates;
-            // ---- select ---- least energy; ties keep the lower index (determinism).
-            if (cr.ok && cr.energy < best_energy) {
-                best_energy = cr.energy;
-                best_index = c;
-                for (int j = 0; j < 6; ++j) x_sol[j] = cr.x[j];
-                res.stats.relinearizations = cr.relinearizations;
-                res.stats.constraint_error_m = cr.error;
-                w.best_count = w.cand_count;
-                std::copy(w.cand, w.cand + w.cand_count, w.best);
+        // ---- solve, select ---- with the force-continuity limit first; a tool that it would leave
+        // hanging short of contact instead goes as far as eq. 5 lets it (no force at a distance).
+        double rate_lower[6], rate_upper[6];
+        local_box(S, target, haptic_motion, true, rate_lower, rate_upper);
+        solved = solve_candidates(model, base, target, rate_lower, rate_upper, reach, w, res.stats, x_sol);
+        if (solved && !touches(model, base, x_sol, w)) {
+            bool at_target = true;
+            for (int j = 0; j < 6 && at_target; ++j) at_target = x_sol[j] == target[j];
+            if (!at_target) {
+                res.stats.released = true;
+                solved = solve_candidates(model, base, target, lower, upper, reach, w, res.stats, x_sol);
             }
         }
         t_solve_end = Clock::now();
         stage_solve += micros(t_gather_end, t_solve_end);
-        if (best_index >= 0) {
-            solved = true;
-            res.stats.atoms = w.best_count;
-        } else {
-            scale *= 0.5;
-        }
+        if (!solved) scale *= 0.5;
     }
 
     const auto t_select = Clock::now();
@@ -739,11 +864,13 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                 }
             }
             res.contacts = res.stats.active_vf + res.stats.active_fv + res.stats.active_ee;
-            res.stats.regions = count_regions(model, state.active, state.active_count);
+            set_tool_planes(model, graphic.orientation, graphic.position, w);
+            res.stats.regions = count_regions(model, w, state.active, state.active_count, at, S.contact_distance_m);
             bool at_target = whole;
             for (int j = 0; j < 6 && at_target; ++j) at_target = x_sol[j] == xh[j];
             if (res.contacts == 0 && at_target) graphic = haptic;
-            res.status = !whole ? StepStatus::Partial : (res.contacts > 0 ? StepStatus::Contact : StepStatus::Free);
+            if (res.contacts > 0) res.status = StepStatus::Contact;
+            else res.status = at_target ? StepStatus::Free : StepStatus::Partial;
         }
     }
     const auto t_force = Clock::now();

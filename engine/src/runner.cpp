@@ -115,6 +115,7 @@ RunResult run_scene(const SceneFile& scene, const RendererSettings& settings_in)
         if (out.stats.active_fv > 0) ++s.steps_with_fv;
         if (out.stats.active_ee > 0) ++s.steps_with_ee;
         if (out.stats.regions >= 2) ++s.steps_with_two_regions;
+        if (out.stats.released) ++s.released_steps;
         s.qp_solves += out.stats.qp_solves;
         s.max_relinearizations = std::max<long>(s.max_relinearizations, out.stats.relinearizations);
         times.push_back(r.step_us);
@@ -199,6 +200,7 @@ bool write_run(const RunResult& run, const std::string& dir, std::string* error)
                           {"steps_with_edge_edge", s.steps_with_ee},
                           {"steps_with_two_or_more_regions", s.steps_with_two_regions},
                           {"max_regions", s.max_regions}};
+    j["released_steps"] = s.released_steps;
     j["qp_solves"] = s.qp_solves;
     j["max_relinearizations"] = s.max_relinearizations;
     const std::string base = (std::filesystem::path(dir) / "").string();

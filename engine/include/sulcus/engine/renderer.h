@@ -19,8 +19,28 @@
 
 namespace sulcus {
 
+// How the local-solution box of eq. 5 bounds each coordinate of the step.
+enum class LocalBox : uint8_t {
+    // Each coordinate moves from the last graphic pose towards the haptic pose, never away from
+    // it; it may pass the haptic pose's value (sliding down an incline). Keeps the local solution
+    // of Fig. 5 and a force that changes no faster than the haptic tool moves.
+    TowardHaptic,
+    // Eq. 5 as printed: each coordinate between the last graphic pose and the haptic pose.
+    // Sliding down a contact inclined to the axes then moves the graphic tool faster than the
+    // haptic tool (by the tangent of the incline), and so the force.
+    Paper,
+};
+
 struct RendererSettings {
     HapticSettings haptic;
+    LocalBox local_box = LocalBox::Paper;
+    // Force continuity: per tick the graphic tool's offset from the haptic tool may change by at
+    // most the haptic tool's own motion plus this, in metres, so the force changes by at most
+    // K_t (|haptic motion per tick| + force_step_margin_m) while the tool stays in contact (a
+    // tool leaving contact goes straight to the haptic pose: no force at a distance). It is also
+    // the speed (metres per tick) at which a graphic tool held back this way catches up.
+    // <= 0 turns the limit off.
+    double force_step_margin_m = 1e-5;
     // Largest violation of an exact (non-linearized) constraint accepted at the solution, in
     // metres. The step re-linearizes until every constraint is within it.
     double constraint_tol_m = 1e-7;
@@ -107,7 +127,8 @@ inline constexpr int kMaxActiveAtoms = 32;
 enum class StepStatus : uint8_t {
     Free,     // no constraint active: the graphic tool is at the haptic pose
     Contact,  // constrained: the graphic tool touches an object
-    Partial,  // the haptic motion of this tick was too large to take whole; moved part way
+    Partial,  // free of contact but short of the haptic pose: the motion of this tick was too
+              // large to take whole, or the force-continuity limit is letting the tool catch up
     Held,     // no safe answer this tick: the last safe pose is kept
     BadInput, // the haptic pose was not finite or not a unit quaternion: last pose kept
 };
@@ -129,7 +150,10 @@ struct StepStats {
     int relinearizations = 0;   // of the chosen candidate
     double constraint_error_m = 0.0;  // largest exact violation at the chosen pose (<= tol)
     int active_vf = 0, active_fv = 0, active_ee = 0;  // active atoms by kind
-    int regions = 0;            // contact regions (connected groups of touching triangles)
+    int regions = 0;            // contact regions (connected parts of the contact)
+    // The force-continuity limit would have left the tool hanging short of any contact, so it
+    // was lifted for this tick: the tool fell onto the next contact or out of contact at once.
+    bool released = false;
 };
 
 struct StepResult {

@@ -44,6 +44,7 @@ struct RunSummary {
     long status_counts[kStepStatusCount] = {};
     long max_regions = 0;
     long steps_with_vf = 0, steps_with_fv = 0, steps_with_ee = 0, steps_with_two_regions = 0;
+    long released_steps = 0;  // ticks where the force-continuity limit was lifted
     long qp_solves = 0;
     long max_relinearizations = 0;
 };

@@ -1,0 +1,208 @@
+// sulcus-cli run end to end: outputs with the documented keys and columns, deterministic
+// steps.csv, and bad input exiting 2 with one line naming the file and the fault.
+#include "sulcus/content/primitives.h"
+#include "sulcus/engine/mesh.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <sys/wait.h>
+
+using namespace sulcus;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kCli = std::string(SULCUS_BINARY_DIR) + "/bin/sulcus-cli";
+
+struct Outcome {
+    int status = -1;
+    std::string out, err;
+};
+
+Outcome run_cli(const std::string& args, const fs::path& dir) {
+    const std::string err_file = (dir / "stderr.txt").string();
+    const std::string cmd = kCli + " " + args + " 2>" + err_file;
+    Outcome o;
+    FILE* p = popen(cmd.c_str(), "r");
+    if (!p) return o;
+    std::array<char, 4096> buf{};
+    size_t n;
+    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) o.out.append(buf.data(), n);
+    const int st = pclose(p);
+    o.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    std::ifstream e(err_file);
+    std::stringstream ss;
+    ss << e.rdbuf();
+    o.err = ss.str();
+    return o;
+}
+
+void write_text(const fs::path& p, const std::string& s) {
+    std::ofstream f(p);
+    f << s;
+}
+
+int count_lines(const std::string& s) {
+    int n = 0;
+    for (char c : s)
+        if (c == '\n') ++n;
+    return n;
+}
+
+class Cli : public ::testing::Test {
+protected:
+    fs::path dir;
+    void SetUp() override {
+        dir = fs::temp_directory_path() /
+              ("sulcus_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        fs::remove_all(dir);
+        fs::create_directories(dir);
+        std::string err;
+        ASSERT_TRUE(write_obj(make_box(Vec3(0.005)), (dir / "cube.obj").string(), &err)) << err;
+        ASSERT_TRUE(write_obj(make_box(Vec3(0.05, 0.01, 0.05), Vec3(0, -0.01, 0)), (dir / "floor.obj").string(), &err));
+        write_text(dir / "traj.csv",
+                   "t,x,y,z,qw,qx,qy,qz\n0,0,0.006,0,1,0,0,0\n0.1,0,0.004,0,1,0,0,0\n0.2,0.003,0.004,0,1,0,0,0\n"
+                   "0.3,0,0.008,0,1,0,0,0\n");
+        write_scene("scene.json", "cube.obj", "floor.obj", "traj.csv");
+    }
+    void TearDown() override { fs::remove_all(dir); }
+
+    void write_scene(const std::string& name, const std::string& tool, const std::string& obj,
+                     const std::string& traj, const std::string& format = "sulcus.scene/1") {
+        write_text(dir / name, "{\"format\": \"" + format + "\", \"objects\": [{\"name\": \"floor\", \"mesh\": \"" + obj +
+                                   "\"}], \"tool\": {\"name\": \"cube\", \"mesh\": \"" + tool +
+                                   "\"}, \"trajectory\": \"" + traj + "\", \"rate_hz\": 1000}");
+    }
+
+    // Runs a bad input and checks: exit 2, one line, naming `file` and containing `what`.
+    void expect_bad(const std::string& scene, const std::string& file, const std::string& what) {
+        const Outcome o = run_cli("run " + (dir / scene).string() + " --out " + (dir / "o").string(), dir);
+        EXPECT_EQ(o.status, 2) << o.err;
+        EXPECT_EQ(count_lines(o.err), 1) << o.err;
+        EXPECT_NE(o.err.find(file), std::string::npos) << o.err;
+        EXPECT_NE(o.err.find(what), std::string::npos) << o.err;
+        EXPECT_FALSE(fs::exists(dir / "o" / "summary.json"));
+    }
+};
+
+std::string strip_step_us(const std::string& csv) {
+    // Removes the 22nd column (step_us) of every row.
+    std::stringstream in(csv), out;
+    std::string line;
+    while (std::getline(in, line)) {
+        std::stringstream ls(line);
+        std::string cell;
+        int col = 0;
+        while (std::getline(ls, cell, ',')) {
+            if (col != 21) out << cell << ',';
+            ++col;
+        }
+        out << '\n';
+    }
+    return out.str();
+}
+
+}  // namespace
+
+TEST_F(Cli, RunWritesSummaryAndStepsWithTheDocumentedFields) {
+    const Outcome o = run_cli("run " + (dir / "scene.json").string() + " --out " + (dir / "o").string() + " --plot", dir);
+    ASSERT_EQ(o.status, 0) << o.err;
+    EXPECT_EQ(count_lines(o.out), 1);
+    std::ifstream sf(dir / "o" / "summary.json");
+    const nlohmann::json j = nlohmann::json::parse(sf);
+    for (const char* key : {"steps", "contact_steps", "max_penetration_m", "max_gap_in_contact_m", "max_force_N",
+                            "max_torque_Nm", "max_force_step_N", "step_time_us", "nan_steps", "status_counts"})
+        EXPECT_TRUE(j.contains(key)) << key;
+    for (const char* key : {"median", "p99", "p999", "max"}) EXPECT_TRUE(j["step_time_us"].contains(key)) << key;
+    EXPECT_EQ(j["steps"].get<long>(), 301);
+    EXPECT_GT(j["contact_steps"].get<long>(), 100);
+    EXPECT_NEAR(j["max_force_N"].get<double>(), 1.0, 1e-6);  // pressed 1 mm at 1000 N/m
+    std::ifstream cf(dir / "o" / "steps.csv");
+    std::string header;
+    std::getline(cf, header);
+    EXPECT_EQ(header,
+              "t,hx,hy,hz,hqw,hqx,hqy,hqz,gx,gy,gz,gqw,gqx,gqy,gqz,fx,fy,fz,tx,ty,tz,step_us,penetration_m,contacts,status");
+    EXPECT_TRUE(fs::exists(dir / "o" / "force.svg"));
+    EXPECT_TRUE(fs::exists(dir / "o" / "step_time.svg"));
+}
+
+TEST_F(Cli, RunningTwiceGivesIdenticalStepsApartFromStepTime) {
+    ASSERT_EQ(run_cli("run " + (dir / "scene.json").string() + " --out " + (dir / "a").string(), dir).status, 0);
+    ASSERT_EQ(run_cli("run " + (dir / "scene.json").string() + " --out " + (dir / "b").string(), dir).status, 0);
+    auto read = [](const fs::path& p) {
+        std::ifstream f(p);
+        std::stringstream s;
+        s << f.rdbuf();
+        return s.str();
+    };
+    const std::string a = read(dir / "a" / "steps.csv"), b = read(dir / "b" / "steps.csv");
+    EXPECT_GT(a.size(), 1000u);
+    EXPECT_EQ(strip_step_us(a), strip_step_us(b));
+}
+
+TEST_F(Cli, MissingSceneFile) { expect_bad("nope.json", "nope.json", ""); }
+
+TEST_F(Cli, MalformedJson) {
+    write_text(dir / "bad.json", "{\"format\": \"sulcus.scene/1\", \"objects\": [\n");
+    expect_bad("bad.json", "bad.json", "line");
+}
+
+TEST_F(Cli, UnknownFormat) {
+    write_scene("fmt.json", "cube.obj", "floor.obj", "traj.csv", "sulcus.scene/9");
+    expect_bad("fmt.json", "fmt.json", "format");
+}
+
+TEST_F(Cli, MissingMesh) {
+    write_scene("m.json", "cube.obj", "missing.obj", "traj.csv");
+    expect_bad("m.json", "missing.obj", "");
+}
+
+TEST_F(Cli, OpenMesh) {
+    TriMesh open = make_box(Vec3(0.05, 0.01, 0.05), Vec3(0, -0.01, 0));
+    open.triangles.pop_back();
+    std::string err;
+    ASSERT_TRUE(write_obj(open, (dir / "open.obj").string(), &err));
+    write_scene("o.json", "cube.obj", "open.obj", "traj.csv");
+    expect_bad("o.json", "open.obj", "");
+}
+
+TEST_F(Cli, FlippedMesh) {
+    TriMesh flipped = make_box(Vec3(0.05, 0.01, 0.05), Vec3(0, -0.01, 0));
+    std::swap(flipped.triangles[3][1], flipped.triangles[3][2]);
+    std::string err;
+    ASSERT_TRUE(write_obj(flipped, (dir / "flip.obj").string(), &err));
+    write_scene("f.json", "cube.obj", "flip.obj", "traj.csv");
+    expect_bad("f.json", "flip.obj", "");
+}
+
+TEST_F(Cli, NanInTrajectory) {
+    write_text(dir / "nan.csv", "t,x,y,z,qw,qx,qy,qz\n0,0,0.006,0,1,0,0,0\n0.1,nan,0.004,0,1,0,0,0\n");
+    write_scene("n.json", "cube.obj", "floor.obj", "nan.csv");
+    expect_bad("n.json", "nan.csv", "line 3");
+}
+
+TEST_F(Cli, TimeGoingBackwards) {
+    write_text(dir / "back.csv", "t,x,y,z,qw,qx,qy,qz\n0,0,0.006,0,1,0,0,0\n0.2,0,0.006,0,1,0,0,0\n0.1,0,0.006,0,1,0,0,0\n");
+    write_scene("b.json", "cube.obj", "floor.obj", "back.csv");
+    expect_bad("b.json", "back.csv", "line 4");
+}
+
+TEST_F(Cli, FirstPosePenetrates) {
+    write_text(dir / "pen.csv", "t,x,y,z,qw,qx,qy,qz\n0,0,0.001,0,1,0,0,0\n0.1,0,0.006,0,1,0,0,0\n");
+    write_scene("p.json", "cube.obj", "floor.obj", "pen.csv");
+    expect_bad("p.json", "pen.csv", "penetrates");
+}
+
+TEST_F(Cli, UsageErrors) {
+    EXPECT_EQ(run_cli("", dir).status, 2);
+    EXPECT_EQ(run_cli("frobnicate", dir).status, 2);
+    EXPECT_EQ(run_cli("run", dir).status, 2);
+    EXPECT_EQ(run_cli("run a.json --bogus", dir).status, 2);
+    EXPECT_EQ(run_cli("help run", dir).status, 0);
+}
