@@ -120,3 +120,67 @@ TEST(PaperScenes, ReplayIsBitIdentical) {
         }
     }
 }
+
+// Fig. 12-13: the line-shaped tool meets V-F, E-E and two contact regions at once.
+TEST(PaperScenes, LineToolMeetsVertexFaceEdgeEdgeAndTwoRegions) {
+    const RunSummary& s = run_of("line_tool").summary;
+    EXPECT_GT(s.steps_with_vf, 100);
+    EXPECT_GT(s.steps_with_ee, 100);
+    EXPECT_GT(s.steps_with_two_regions, 50);
+    EXPECT_GE(s.max_regions, 2);
+}
+
+// Fig. 5a: the haptic tool goes through a 0.05 mm plate at 1 and 5 m/s (turning, in the fast
+// one); the graphic tool stays on top of it on every tick.
+TEST(PaperScenes, ThinPlateIsNeverPoppedThrough) {
+    const double top = 0.025e-3 + 2.5e-3;  // plate half thickness + cube half size
+    for (const char* name : {"thin_plate", "thin_plate_fast"}) {
+        const RunResult& run = run_of(name);
+        double lowest_haptic = 1.0;
+        for (const TickRecord& r : run.ticks) {
+            lowest_haptic = std::min(lowest_haptic, r.haptic.position.y);
+            EXPECT_GE(r.graphic.position.y, top - 1e-7) << name << " t=" << r.t;
+        }
+        EXPECT_LT(lowest_haptic, -5e-3) << name;  // the haptic tool did go through
+    }
+}
+
+// Fig. 5b: sunk past a sharp ridge to where the nearest free pose is on the other flank, the
+// graphic tool keeps to the flank it came from (the local solution), with a force up-left.
+TEST(PaperScenes, SharpCornerKeepsTheLocalSolution) {
+    const RunResult& run = run_of("sharp_corner");
+    bool went_past = false;
+    for (const TickRecord& r : run.ticks) {
+        if (r.haptic.position.x > 2e-3) went_past = true;
+        EXPECT_LE(r.graphic.position.x, 0.0) << r.t;  // the cube's centre never crosses the apex line
+    }
+    EXPECT_TRUE(went_past);
+    const TickRecord& deepest = *std::min_element(run.ticks.begin(), run.ticks.end(),
+                                                  [](const TickRecord& a, const TickRecord& b) {
+                                                      return a.haptic.position.y < b.haptic.position.y;
+                                                  });
+    EXPECT_LT(deepest.force_N.x, 0.0);
+    EXPECT_GT(deepest.force_N.y, 0.0);
+}
+
+// Fig. 10-11: in the 1 mm cavity the cube turns freely up to a(cos t + sin t) = h, then the
+// walls hold it and a torque resists; at zero clearance it cannot turn at all.
+TEST(PaperScenes, CavityLimitsTheTurnAndRendersTorque) {
+    const double limit = std::asin(1.1 / std::sqrt(2.0)) - std::atan(1.0);  // 5 mm (cos t + sin t) = 5.5 mm
+    const RunResult& wide = run_of("cavity_1mm");
+    double most = 0.0;
+    for (const TickRecord& r : wide.ticks) most = std::max(most, glm::angle(r.graphic.orientation));
+    EXPECT_LE(most, limit + 1e-7);
+    EXPECT_GE(most, limit - 1e-3);
+    EXPECT_GT(wide.summary.max_torque_Nm, 0.005);
+    const RunResult& tight = run_of("cavity_0mm");
+    for (const TickRecord& r : tight.ticks) EXPECT_LE(glm::angle(r.graphic.orientation), 1e-6) << r.t;
+    EXPECT_GT(tight.summary.max_torque_Nm, 0.005);
+}
+
+TEST(PaperScenes, FreeMotionNeverTouches) {
+    const RunResult& run = run_of("free_motion");
+    EXPECT_EQ(run.summary.contact_steps, 0);
+    EXPECT_EQ(run.summary.max_force_N, 0.0);
+    EXPECT_EQ(run.summary.status_counts[static_cast<int>(StepStatus::Free)], run.summary.steps);
+}

@@ -39,7 +39,10 @@ const char* to_string(Status s);
 
 struct Settings {
     // A row counts as satisfied when its scaled slack (a.x - b)/|W^(-1/2) a| >= -feasibility_tol.
-    // The slack is then a distance in the W-metric.
+    // The slack is then a distance in the W-metric. The tolerance is scaled by (1 + |c|), c the
+    // row's scaled right-hand side (b - a.t)/|W^(-1/2) a|, so rounding is never a violation; a
+    // row linearly dependent on the active set may also fall short by its dependency_tol-sized
+    // tilt times |u| (it is then consistent with the active rows up to rounding).
     double feasibility_tol = 1e-12;
     // Relative threshold under which a new constraint is taken as linearly dependent on the
     // active set.
