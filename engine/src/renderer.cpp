@@ -143,7 +143,6 @@ struct Workspace {
     int cand_count = 0;
     Atom best[kMaxAtoms];
     int best_count = 0;
-    double best_mult_row[kMaxAtoms];
     qp::Problem problem;
     qp::Solution solution;
     qp::WarmStart warm;
@@ -227,7 +226,8 @@ void add_atom(Workspace& w, const Atom& a) {
 }
 
 void add_alt(Workspace& w, int replace, const Atom& a) {
-    if (w.alt_count < kMaxAlts) w.alts[w.alt_count++] = Alt{replace, a};
+    // An alternative to an atom that did not fit has nothing to replace.
+    if (replace < w.atom_count && w.alt_count < kMaxAlts) w.alts[w.alt_count++] = Alt{replace, a};
 }
 
 Atom vf_atom(uint16_t object, uint32_t tool_vertex, uint32_t tri) {
@@ -774,8 +774,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     bool solved = false;
     double x_sol[6] = {0, 0, 0, 0, 0, 0};
     bool free_motion = false;
-    auto t_detect_end = t_start, t_gather_end = t_start, t_solve_end = t_start;
-    (void)t_solve_end;
+    auto t_detect_end = t_start, t_gather_end = t_start;
     double stage_detect = 0, stage_gather = 0, stage_solve = 0;
 
     for (int attempt = 0; attempt <= kMaxHalvings && !solved; ++attempt) {
@@ -814,7 +813,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
         gather_atoms(model, reach, w);
         t_gather_end = Clock::now();
         stage_gather += micros(t_detect_end, t_gather_end);
-        res.stats.pairs_in_contact = w.atom_count;
+        res.stats.atoms_gathered = w.atom_count;
 
         // ---- solve, select ---- with the force-continuity limit first; a tool that it would leave
         // hanging short of contact instead goes as far as eq. 5 lets it (no force at a distance).
@@ -829,8 +828,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                 solved = solve_candidates(model, base, target, lower, upper, reach, w, res.stats, x_sol);
             }
         }
-        t_solve_end = Clock::now();
-        stage_solve += micros(t_gather_end, t_solve_end);
+        stage_solve += micros(t_gather_end, Clock::now());
         if (!solved) scale *= 0.5;
     }
 

@@ -72,6 +72,11 @@ RunResult run_scene(const SceneFile& scene, const RendererSettings& settings_in)
         }
     }
     State state = make_state(start);
+    {
+        // Warm-up outside the statistics: the first step on a thread makes its workspace.
+        State scratch = state;
+        step(model, scratch, start);
+    }
     run.ticks.reserve(static_cast<size_t>(n));
     std::vector<double> times, stage[5];
     times.reserve(static_cast<size_t>(n));

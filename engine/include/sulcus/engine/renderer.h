@@ -142,7 +142,7 @@ struct StageTimes {
 struct StepStats {
     StageTimes times;
     int triangles_near = 0;     // triangles within reach of this tick's motion (detect)
-    int pairs_in_contact = 0;   // tool-triangle pairs whose separation is within reach
+    int atoms_gathered = 0;     // constraint atoms found within reach (gather)
     int candidates = 0;         // candidate principal-contact sets solved (gather/solve)
     int atoms = 0;              // constraint atoms in the chosen candidate
     int qp_solves = 0;
