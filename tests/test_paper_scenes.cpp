@@ -1,5 +1,6 @@
 // The bundled paper scenes (content/assets/scenes/paper) run headless: every invariant of the
 // renderer asserted on every scene, plus what each experiment is meant to show.
+#include "so3.h"
 #include "sulcus/engine/runner.h"
 #include "sulcus/engine/scene_file.h"
 
@@ -64,8 +65,9 @@ TEST(PaperScenes, NoPenetrationNoNanNoGap) {
     }
 }
 
-// Force continuity: with the haptic tool moving dp (m) in a tick, the force changes by at most
-// K_t (|dp| + force_step_margin_m) (the renderer's force-continuity box). The only exception is
+// Force continuity: with the haptic tool moving dp (m) and turning dtheta (rad) in a tick, the
+// force changes by at most K_t (|dp| + radius |dtheta| + force_step_margin_m) (the renderer's
+// force-continuity box; radius * dtheta is how far the turn moves the tool's points). The only exception is
 // a tick where the tool falls onto the next contact or out of contact (a real drop off an edge,
 // reported as `released`); those must be rare.
 TEST(PaperScenes, ForceChangePerTickIsBoundedByTheHapticMotion) {
@@ -74,12 +76,15 @@ TEST(PaperScenes, ForceChangePerTickIsBoundedByTheHapticMotion) {
         const SceneLoad load = load_scene(kSceneDir + "/" + name + ".json");
         ASSERT_TRUE(load.ok());
         const double k = load.scene.haptic.stiffness_N_per_m;
+        double radius = 0.0;  // the renderer's tool radius: farthest vertex from the tool origin
+        for (const Vec3& v : load.scene.tool.mesh.vertices) radius = std::max(radius, glm::length(v));
         long drops = 0;
         for (size_t i = 1; i < run.ticks.size(); ++i) {
             const TickRecord& a = run.ticks[i - 1];
             const TickRecord& b = run.ticks[i];
             const double dp = glm::length(b.haptic.position - a.haptic.position);
-            const double bound = k * (dp + defaults.force_step_margin_m) * (1.0 + 1e-9);
+            const double dt = glm::length(quat_log(b.haptic.orientation * glm::conjugate(a.haptic.orientation)));
+            const double bound = k * (dp + radius * dt + defaults.force_step_margin_m) * (1.0 + 1e-9);
             const double df = glm::length(b.force_N - a.force_N);
             if (b.stats.released && df > bound) {
                 ++drops;

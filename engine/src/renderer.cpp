@@ -77,6 +77,7 @@ constexpr int kMaxFeatures = 4096;
 constexpr int kMaxAlts = 32;
 constexpr int kMaxHalvings = 6;
 constexpr int kMaxCcdIterations = 64;
+constexpr int kMaxPasses = 3;
 // A tool vertex more than this behind a face plane does not face it (it is across a thin part).
 constexpr double kBackFace = 1e-6;
 
@@ -501,8 +502,9 @@ void add_separating_plane(const Model& model, const NearTri& nt, double reach, W
 // offset graphic - haptic by x - dh; holding each |x_j - dh_j| <= |dh_j| + c with c = margin/sqrt(3)
 // bounds |x - dh| by |dh| + margin (Minkowski), hence the force change by K_t (|dh| + margin).
 // x = 0 (staying) is always inside.
-void local_box(const RendererSettings& S, const double target[6], const Vec3& haptic_motion, bool limit_rate,
-               double lower[6], double upper[6]) {
+void local_box(const RendererSettings& S, double tool_radius, const double target[6], const Vec3& haptic_motion,
+               double haptic_turn, const Vec3& moved, bool limit_rate, double recover_m, double lower[6],
+               double upper[6]) {
     const HapticSettings& h = S.haptic;
     double e0 = 0.0;
     for (int j = 0; j < 6; ++j) e0 += 0.5 * (j < 3 ? h.weight_translational : h.weight_rotational) * target[j] * target[j];
@@ -511,13 +513,19 @@ void local_box(const RendererSettings& S, const double target[6], const Vec3& ha
         double slack = 0.0;
         if (S.local_box == LocalBox::TowardHaptic)
             slack = std::sqrt(2.0 * e0 / (j < 3 ? h.weight_translational : h.weight_rotational));
-        lower[j] = t < 0.0 ? t - slack : 0.0;
-        upper[j] = t > 0.0 ? t + slack : 0.0;
+        // A last pose inside the tolerance (a graze of up to constraint_tol_m) may need a step
+        // away from the haptic pose to come out: then every coordinate gets that much room.
+        const double recover = j < 3 ? recover_m : recover_m / tool_radius;
+        lower[j] = (t < 0.0 ? t - slack : 0.0) - recover;
+        upper[j] = (t > 0.0 ? t + slack : 0.0) + recover;
         if (limit_rate && j < 3 && S.force_step_margin_m > 0.0) {
             const double dh = haptic_motion[j];
-            const double c = S.force_step_margin_m / std::sqrt(3.0);
-            lower[j] = std::max(lower[j], dh - std::abs(dh) - c);
-            upper[j] = std::min(upper[j], dh + std::abs(dh) + c);
+            // The haptic tool's turn moves its points by up to radius * turn: contacts may move
+            // that much too.
+            const double c = (S.force_step_margin_m + tool_radius * haptic_turn) / std::sqrt(3.0);
+            // `moved`: how far earlier passes of this tick have already taken the tool.
+            lower[j] = std::max(lower[j], dh - std::abs(dh) - c - moved[j]);
+            upper[j] = std::min(upper[j], dh + std::abs(dh) + c - moved[j]);
         }
     }
 }
@@ -530,7 +538,8 @@ bool inside_box(const double x[6], const double lower[6], const double upper[6])
 
 // solve: one candidate set by sequential linearization (re-linearize until exact).
 CandidateResult solve_candidate(const Model& model, const Pose& base, const double target[6], const double lower[6],
-                                const double upper[6], double reach, Workspace& w, StepStats& stats) {
+                                const double upper[6], double reach, const Atom* previous, int previous_count,
+                                Workspace& w, StepStats& stats) {
     const RendererSettings& S = model.settings;
     const HapticSettings& h = S.haptic;
     CandidateResult r;
@@ -542,7 +551,14 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const doub
         P.upper[j] = upper[j];
     }
     double x[6] = {0, 0, 0, 0, 0, 0};
+    // Warm start: the rows of the contacts active at the last tick go into the working set first.
     w.warm.count = 0;
+    for (int i = 0; i < w.cand_count && i < qp::kMaxRows && w.warm.count < qp::kVars; ++i)
+        for (int k = 0; k < previous_count; ++k)
+            if (w.cand[i].same_as(previous[k])) {
+                w.warm.active[w.warm.count++] = i;
+                break;
+            }
     int guard_rounds = 0;
     for (int it = 0; it < S.max_relinearizations; ++it) {
         const ToolPoseAt at = tool_pose_at(base, x);
@@ -641,7 +657,8 @@ Vec3 contact_point(const Model& model, const Atom& a, const ToolPoseAt& t) {
 // solve + select: every candidate set within the box; the feasible one of least energy wins
 // (ties keep the lower index, for determinism). Leaves the winner's atoms in w.best.
 bool solve_candidates(const Model& model, const Pose& base, const double target[6], const double lower[6],
-                      const double upper[6], double reach, Workspace& w, StepStats& stats, double x_out[6]) {
+                      const double upper[6], double reach, const State& state, Workspace& w, StepStats& stats,
+                      double x_out[6]) {
     const int candidates = std::min(1 + w.alt_count, std::max(1, model.settings.max_candidates));
     double best_energy = 1e300;
     bool found = false;
@@ -649,7 +666,8 @@ bool solve_candidates(const Model& model, const Pose& base, const double target[
         w.cand_count = w.atom_count;
         std::copy(w.atoms, w.atoms + w.atom_count, w.cand);
         if (c > 0) w.cand[w.alts[c - 1].replace] = w.alts[c - 1].atom;
-        const CandidateResult cr = solve_candidate(model, base, target, lower, upper, reach, w, stats);
+        const CandidateResult cr =
+            solve_candidate(model, base, target, lower, upper, reach, state.active, state.active_count, w, stats);
         ++stats.candidates;
         if (cr.ok && cr.energy < best_energy) {
             best_energy = cr.energy;
@@ -663,13 +681,6 @@ bool solve_candidates(const Model& model, const Pose& base, const double target[
     }
     if (found) stats.atoms = w.best_count;
     return found;
-}
-
-bool touches(const Model& model, const Pose& base, const double x[6], const Workspace& w) {
-    const ToolPoseAt at = tool_pose_at(base, x);
-    for (int i = 0; i < w.best_count; ++i)
-        if (evaluate_atom(model, w.best[i], at, nullptr) <= 2.0 * model.settings.constraint_tol_m) return true;
-    return false;
 }
 
 // Whether world point m lies on the contact: on the tool's surface and on an object's surface,
@@ -725,6 +736,51 @@ int count_regions(const Model& model, const Workspace& w, const Atom* atoms, int
     return regions;
 }
 
+// The contacts of the chosen atom set at x: an atom within 2 tolerances of zero is touching; it
+// is a real contact when its features themselves meet, and a virtual one when it holds the tool
+// on an extended plane (a vertex past the edge of the face whose plane it touches, edges whose
+// lines meet beyond their ends).
+struct ContactCheck {
+    bool real = false;
+    bool virtual_only = false;  // touching somewhere, but nowhere really
+    bool any_virtual = false;
+};
+
+ContactCheck check_contacts(const Model& model, const Pose& base, const double x[6], const Workspace& w) {
+    const double tol = model.settings.constraint_tol_m;
+    const ToolPoseAt at = tool_pose_at(base, x);
+    const ModelTool& tool = model.tool;
+    ContactCheck c;
+    bool touching = false;
+    for (int i = 0; i < w.best_count; ++i) {
+        const Atom& a = w.best[i];
+        if (evaluate_atom(model, a, at, nullptr) > 2.0 * tol) continue;
+        touching = true;
+        const ModelObject& o = model.objects[a.object];
+        double d = 0.0;
+        if (a.kind == AtomKind::VertexFace) {
+            const auto& t = o.mesh.triangles[a.object_triangle];
+            d = closest_on_triangle(at.p + at.R * tool.mesh.vertices[a.tool_vertex], o.mesh.vertices[t[0]],
+                                    o.mesh.vertices[t[1]], o.mesh.vertices[t[2]]).distance;
+        } else if (a.kind == AtomKind::FaceVertex) {
+            d = 1e300;
+            const Vec3 v = glm::transpose(at.R) * (o.mesh.vertices[a.object_vertex] - at.p);  // tool frame
+            for (const auto& t : tool.mesh.triangles)
+                d = std::min(d, closest_on_triangle(v, tool.mesh.vertices[t[0]], tool.mesh.vertices[t[1]],
+                                                    tool.mesh.vertices[t[2]]).distance);
+        } else if (a.kind == AtomKind::EdgeEdge) {
+            const auto& te = tool.edges[a.tool_edge];
+            const MeshEdge& e = o.topology.edges[a.object_edge];
+            d = closest_segments(at.p + at.R * tool.mesh.vertices[te[0]], at.p + at.R * tool.mesh.vertices[te[1]],
+                                 o.mesh.vertices[e.v[0]], o.mesh.vertices[e.v[1]]).distance;
+        }
+        if (d > 10.0 * tol) c.any_virtual = true;
+        else c.real = true;
+    }
+    c.virtual_only = touching && !c.real;
+    return c;
+}
+
 }  // namespace
 
 StepResult step(const Model& model, State& state, const Pose& haptic_in) {
@@ -746,30 +802,23 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     // Unit to rounding is kept as given, so that free motion reproduces the input bit for bit.
     if (std::abs(qn - 1.0) > 1e-12) haptic.orientation = haptic_in.orientation / qn;
     if (!state.initialized) state = make_state(haptic);
-    const Pose base = state.graphic;
-
-    // The haptic pose in step coordinates: translation and world rotation vector from the base.
-    double xh[6];
-    {
-        const Vec3 dp = haptic.position - base.position;
-        const Vec3 dt = quat_log(haptic.orientation * glm::conjugate(base.orientation));
-        xh[0] = dp.x; xh[1] = dp.y; xh[2] = dp.z;
-        xh[3] = dt.x; xh[4] = dt.y; xh[5] = dt.z;
-    }
-
     // ---- detect ----
     const size_t nv = model.tool.mesh.vertices.size();
     if (nv > static_cast<size_t>(kMaxToolVertices) || model.tool.face_normals.size() > static_cast<size_t>(kMaxToolFaces)) {
-        res.graphic = base;
+        res.graphic = state.graphic;
         res.status = StepStatus::Held;
-        compute_wrench(S.haptic, base, haptic, res.force_N, res.torque_Nm);
+        compute_wrench(S.haptic, state.graphic, haptic, res.force_N, res.torque_Nm);
         return res;
     }
-    for (size_t i = 0; i < nv; ++i) w.tool_world[i] = base.apply(model.tool.mesh.vertices[i]);
-    set_tool_planes(model, base.orientation, base.position, w);
+    const Vec3 haptic_motion = haptic.position - state.last_haptic.position;
+    const double haptic_turn =
+        glm::length(quat_log(haptic.orientation * glm::conjugate(state.last_haptic.orientation)));
+    const double radius = std::max(model.tool.radius_m, 1e-6);
+    Pose base = state.graphic;
+    Vec3 moved(0.0);  // translation of earlier passes of this tick
 
     double scale = 1.0;
-    double target[6], lower[6], upper[6];
+    double xh[6], target[6], lower[6], upper[6];
     double reach = 0.0;
     bool solved = false;
     double x_sol[6] = {0, 0, 0, 0, 0, 0};
@@ -777,59 +826,96 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     auto t_detect_end = t_start, t_gather_end = t_start;
     double stage_detect = 0, stage_gather = 0, stage_solve = 0;
 
-    for (int attempt = 0; attempt <= kMaxHalvings && !solved; ++attempt) {
-        auto t0 = Clock::now();
-        for (int j = 0; j < 6; ++j) target[j] = scale * xh[j];
-        // The box of eq. 5 sets the reach; the force-continuity limit narrows it while in contact.
-        const Vec3 haptic_motion = haptic.position - state.last_haptic.position;
-        local_box(S, target, haptic_motion, false, lower, upper);
-        double move2 = 0.0, turn2 = 0.0;
-        for (int j = 0; j < 6; ++j) {
-            const double m = std::max(std::abs(lower[j]), std::abs(upper[j]));
-            (j < 3 ? move2 : turn2) += m * m;
+    // A solution held on an extended plane (its contact is not real) becomes the base of another
+    // pass of the stages within the tick, so the tool comes round the feature instead of hanging.
+    for (int pass = 0; pass < kMaxPasses; ++pass) {
+        if (pass > 0) {
+            const ToolPoseAt at = tool_pose_at(base, x_sol);
+            moved += at.p - base.position;
+            base.position = at.p;
+            base.orientation = at.q;
+            solved = false;
+            scale = 1.0;
         }
-        const double move = std::sqrt(move2), turn = std::sqrt(turn2);
-        // No tool point moves further than this within the box.
-        reach = move + turn * (model.tool.radius_m + move) + S.contact_distance_m + 10.0 * S.constraint_tol_m;
-        if (!gather_near(model, w.tool_world, reach, w)) {
-            scale *= 0.5;
-            stage_detect += micros(t0, Clock::now());
-            continue;
+        // The haptic pose in step coordinates: translation and world rotation vector from the base.
+        {
+            const Vec3 dp = haptic.position - base.position;
+            const Vec3 dt = quat_log(haptic.orientation * glm::conjugate(base.orientation));
+            xh[0] = dp.x; xh[1] = dp.y; xh[2] = dp.z;
+            xh[3] = dt.x; xh[4] = dt.y; xh[5] = dt.z;
         }
-        res.stats.triangles_near = w.near_count;
-        if (inside_box(target, lower, upper) &&
-            (w.near_count == 0 ||
-             (state.active_count == 0 && motion_is_free(model, base, target, S.contact_distance_m, w)))) {
-            free_motion = true;
-            solved = true;
-            for (int j = 0; j < 6; ++j) x_sol[j] = target[j];
-            stage_detect += micros(t0, Clock::now());
-            break;
-        }
-        t_detect_end = Clock::now();
-        stage_detect += micros(t0, t_detect_end);
+        for (size_t i = 0; i < nv; ++i) w.tool_world[i] = base.apply(model.tool.mesh.vertices[i]);
+        set_tool_planes(model, base.orientation, base.position, w);
 
-        // ---- gather ----
-        gather_atoms(model, reach, w);
-        t_gather_end = Clock::now();
-        stage_gather += micros(t_detect_end, t_gather_end);
-        res.stats.atoms_gathered = w.atom_count;
-
-        // ---- solve, select ---- with the force-continuity limit first; a tool that it would leave
-        // hanging short of contact instead goes as far as eq. 5 lets it (no force at a distance).
-        double rate_lower[6], rate_upper[6];
-        local_box(S, target, haptic_motion, true, rate_lower, rate_upper);
-        solved = solve_candidates(model, base, target, rate_lower, rate_upper, reach, w, res.stats, x_sol);
-        if (solved && !touches(model, base, x_sol, w)) {
-            bool at_target = true;
-            for (int j = 0; j < 6 && at_target; ++j) at_target = x_sol[j] == target[j];
-            if (!at_target) {
-                res.stats.released = true;
-                solved = solve_candidates(model, base, target, lower, upper, reach, w, res.stats, x_sol);
+        for (int attempt = 0; attempt <= kMaxHalvings && !solved; ++attempt) {
+            auto t0 = Clock::now();
+            for (int j = 0; j < 6; ++j) target[j] = scale * xh[j];
+            // The box of eq. 5 sets the reach; the force-continuity limit narrows it in contact.
+            local_box(S, radius, target, haptic_motion, haptic_turn, moved, false, 0.0, lower, upper);
+            double move2 = 0.0, turn2 = 0.0;
+            for (int j = 0; j < 6; ++j) {
+                const double m = std::max(std::abs(lower[j]), std::abs(upper[j]));
+                (j < 3 ? move2 : turn2) += m * m;
             }
+            const double move = std::sqrt(move2), turn = std::sqrt(turn2);
+            // No tool point moves further than this within the box.
+            reach = move + turn * (model.tool.radius_m + move) + S.contact_distance_m + 10.0 * S.constraint_tol_m;
+            if (!gather_near(model, w.tool_world, reach, w)) {
+                scale *= 0.5;
+                stage_detect += micros(t0, Clock::now());
+                continue;
+            }
+            res.stats.triangles_near = w.near_count;
+            if (pass == 0 && inside_box(target, lower, upper) &&
+                (w.near_count == 0 ||
+                 (state.active_count == 0 && motion_is_free(model, base, target, S.contact_distance_m, w)))) {
+                free_motion = true;
+                solved = true;
+                for (int j = 0; j < 6; ++j) x_sol[j] = target[j];
+                stage_detect += micros(t0, Clock::now());
+                break;
+            }
+            t_detect_end = Clock::now();
+            stage_detect += micros(t0, t_detect_end);
+
+            // ---- gather ----
+            gather_atoms(model, reach, w);
+            t_gather_end = Clock::now();
+            stage_gather += micros(t_detect_end, t_gather_end);
+            res.stats.atoms_gathered = w.atom_count;
+
+            // ---- solve, select ---- with the force-continuity limit first; a tool that it would
+            // leave hanging short of contact instead goes as far as eq. 5 lets it (no force at a
+            // distance).
+            // The rate-limited box first; a tool it would leave hanging short of contact goes as
+            // far as eq. 5 lets it. A last pose inside the tolerance (a graze) may need a step away
+            // from the haptic pose to come out: only when nothing is feasible without it does
+            // every coordinate get that room, so it is never spent on getting closer.
+            double rate_lower[6], rate_upper[6];
+            for (int round = 0; round < 2 && !solved; ++round) {
+                const double recover = round == 0 ? 0.0 : 10.0 * S.constraint_tol_m;
+                local_box(S, radius, target, haptic_motion, haptic_turn, moved, false, recover, lower, upper);
+                local_box(S, radius, target, haptic_motion, haptic_turn, moved, true, recover, rate_lower, rate_upper);
+                solved = solve_candidates(model, base, target, rate_lower, rate_upper, reach, state, w, res.stats, x_sol);
+                if (solved && !check_contacts(model, base, x_sol, w).real) {
+                    bool at_target = true;
+                    for (int j = 0; j < 6 && at_target; ++j) at_target = x_sol[j] == target[j];
+                    if (!at_target) {
+                        res.stats.released = true;
+                        solved = solve_candidates(model, base, target, lower, upper, reach, state, w, res.stats, x_sol);
+                    }
+                }
+            }
+            stage_solve += micros(t_gather_end, Clock::now());
+            if (!solved) scale *= 0.5;
         }
-        stage_solve += micros(t_gather_end, Clock::now());
-        if (!solved) scale *= 0.5;
+        if (!solved || free_motion || !check_contacts(model, base, x_sol, w).any_virtual) break;
+        ++res.stats.passes;
+    }
+    if (!solved && res.stats.passes > 0) {
+        // A later pass found nothing better: its base, the earlier pass's answer, stands.
+        solved = true;
+        for (double& v : x_sol) v = 0.0;
     }
 
     const auto t_select = Clock::now();

@@ -58,7 +58,7 @@ std::string tick_label(double v, double step) {
     if (std::abs(v) < std::abs(step) * 1e-9) v = 0.0;
     char buf[48];
     const double big = std::abs(v);
-    if (big >= 1e6 || (big > 0.0 && step < 1e-4)) {
+    if (big >= 1e6 || step < 1e-4) {
         std::snprintf(buf, sizeof buf, "%.3g", v);
     } else {
         const int decimals = std::max(0, static_cast<int>(-std::floor(std::log10(step) + 1e-9)));

@@ -35,8 +35,9 @@ struct RendererSettings {
     HapticSettings haptic;
     LocalBox local_box = LocalBox::Paper;
     // Force continuity: per tick the graphic tool's offset from the haptic tool may change by at
-    // most the haptic tool's own motion plus this, in metres, so the force changes by at most
-    // K_t (|haptic motion per tick| + force_step_margin_m) while the tool stays in contact (a
+    // most the haptic tool's own motion (translation plus radius times turn) plus this, in
+    // metres, so the force changes by at most
+    // K_t (|dp| + radius |dtheta| + force_step_margin_m) while the tool stays in contact (a
     // tool leaving contact goes straight to the haptic pose: no force at a distance). It is also
     // the speed (metres per tick) at which a graphic tool held back this way catches up.
     // <= 0 turns the limit off.
@@ -154,6 +155,9 @@ struct StepStats {
     // The force-continuity limit would have left the tool hanging short of any contact, so it
     // was lifted for this tick: the tool fell onto the next contact or out of contact at once.
     bool released = false;
+    // Extra passes of the stages this tick because a solution's contact was not real (held on
+    // the extended plane of a face or the line of an edge past its end).
+    int passes = 0;
 };
 
 struct StepResult {
