@@ -77,7 +77,7 @@ constexpr int kMaxFeatures = 4096;
 constexpr int kMaxAlts = 32;
 constexpr int kMaxHalvings = 6;
 constexpr int kMaxCcdIterations = 64;
-constexpr int kMaxPasses = 3;
+constexpr int kMaxPasses = 6;
 // A tool vertex more than this behind a face plane does not face it (it is across a thin part).
 constexpr double kBackFace = 1e-6;
 
@@ -485,6 +485,7 @@ void add_separating_plane(const Model& model, const NearTri& nt, double reach, W
         Atom at;
         at.kind = AtomKind::FixedAxis;
         at.object = nt.object;
+        at.object_triangle = nt.tri;
         at.object_vertex = t[vk];
         at.tool_vertex = static_cast<uint32_t>(a);
         at.axis = sat.axis;
@@ -526,6 +527,10 @@ void local_box(const RendererSettings& S, double tool_radius, const double targe
             // `moved`: how far earlier passes of this tick have already taken the tool.
             lower[j] = std::max(lower[j], dh - std::abs(dh) - c - moved[j]);
             upper[j] = std::min(upper[j], dh + std::abs(dh) + c - moved[j]);
+            // Staying put is always allowed, even when an earlier released pass went past the
+            // limit.
+            lower[j] = std::min(lower[j], 0.0);
+            upper[j] = std::max(upper[j], 0.0);
         }
     }
 }
@@ -758,7 +763,7 @@ ContactCheck check_contacts(const Model& model, const Pose& base, const double x
         touching = true;
         const ModelObject& o = model.objects[a.object];
         double d = 0.0;
-        if (a.kind == AtomKind::VertexFace) {
+        if (a.kind == AtomKind::VertexFace || a.kind == AtomKind::FixedAxis) {
             const auto& t = o.mesh.triangles[a.object_triangle];
             d = closest_on_triangle(at.p + at.R * tool.mesh.vertices[a.tool_vertex], o.mesh.vertices[t[0]],
                                     o.mesh.vertices[t[1]], o.mesh.vertices[t[2]]).distance;
@@ -897,7 +902,10 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                 local_box(S, radius, target, haptic_motion, haptic_turn, moved, false, recover, lower, upper);
                 local_box(S, radius, target, haptic_motion, haptic_turn, moved, true, recover, rate_lower, rate_upper);
                 solved = solve_candidates(model, base, target, rate_lower, rate_upper, reach, state, w, res.stats, x_sol);
-                if (solved && !check_contacts(model, base, x_sol, w).real) {
+                // Released only when it touches nothing at all: a contact held on an extended
+                // plane is taken on by another pass instead.
+                const ContactCheck cc = solved ? check_contacts(model, base, x_sol, w) : ContactCheck{};
+                if (solved && !cc.real && !cc.virtual_only) {
                     bool at_target = true;
                     for (int j = 0; j < 6 && at_target; ++j) at_target = x_sol[j] == target[j];
                     if (!at_target) {
@@ -916,6 +924,12 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
         // A later pass found nothing better: its base, the earlier pass's answer, stands.
         solved = true;
         for (double& v : x_sol) v = 0.0;
+    }
+    if (solved && !free_motion && res.stats.passes > 0 && check_contacts(model, base, x_sol, w).virtual_only) {
+        // Still held only on extended planes after every pass: no safe answer this tick. The
+        // last pose (a real contact) is kept rather than a force rendered at a distance.
+        solved = false;
+        base = state.graphic;
     }
 
     const auto t_select = Clock::now();
