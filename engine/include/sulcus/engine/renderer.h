@@ -22,12 +22,12 @@ namespace sulcus {
 // How the local-solution box of eq. 5 bounds each coordinate of the step.
 enum class LocalBox : uint8_t {
     // Each coordinate moves from the last graphic pose towards the haptic pose, never away from
-    // it; it may pass the haptic pose's value (sliding down an incline). Keeps the local solution
-    // of Fig. 5 and a force that changes no faster than the haptic tool moves.
+    // it, but may pass the haptic pose's value. Overshooting along an incline makes the graphic
+    // tool jump at contact switches, so this is not the default.
     TowardHaptic,
-    // Eq. 5 as printed: each coordinate between the last graphic pose and the haptic pose.
-    // Sliding down a contact inclined to the axes then moves the graphic tool faster than the
-    // haptic tool (by the tangent of the incline), and so the force.
+    // Eq. 5 as printed: each coordinate between the last graphic pose and the haptic pose. Its far
+    // side is what keeps the graphic tool from jumping at contact switches; the force-continuity
+    // limit below bounds how fast it may slide down an incline.
     Paper,
 };
 
