@@ -271,6 +271,25 @@ void add_disjunction(const Model& model, Workspace& w, uint16_t object, uint32_t
     }
 }
 
+// A tool vertex clearly off a convex edge or a vertex, in its Voronoi region: the plane through
+// the feature facing the vertex (normal along feature -> vertex) separates it from the solid
+// there (Types 8 and 9 as a dynamic plane, frozen for the step). Unlike one of the feature's face
+// planes, it does not reach past the feature, so the tool is never held on a face's extended
+// plane millimetres from the face.
+constexpr double kOffFeature = 1e-6;
+
+void add_feature_plane(Workspace& w, uint16_t object, uint32_t a, const Vec3& wa, const Vec3& on_feature,
+                       uint32_t feature_vertex, uint32_t tri) {
+    Atom at;
+    at.kind = AtomKind::FixedAxis;
+    at.object = object;
+    at.tool_vertex = a;
+    at.object_vertex = feature_vertex;
+    at.object_triangle = tri;
+    at.axis = glm::normalize(wa - on_feature);
+    add_atom(w, at);
+}
+
 bool in_vertex_cone(const ModelObject& obj, uint32_t v, const Vec3& p) {
     const auto& topo = obj.topology;
     const Vec3& pv = obj.mesh.vertices[v];
@@ -346,11 +365,35 @@ void gather_atoms(const Model& model, double reach, Workspace& w) {
                 const double h = signed_to_plane(obj, e.tri[0], wa);
                 if (glm::dot(off, off) - h * h <= 1e-18 && h >= -kBackFace) add_atom(w, vf_atom(k.object, k.a, e.tri[0]));
             } else if (e.convexity == Convexity::Concave) {
-                // eq. 8: both faces of a concave edge hold at once (Types 3 and 5).
+                // eq. 8: both faces of a concave edge hold at once (Types 3 and 5) for a vertex
+                // resting in the valley. A vertex clearly off it is over one of the faces, whose
+                // own region holds it; their planes reach past the valley and would hold it on
+                // an extended plane.
+                const Vec3& v0 = obj.mesh.vertices[e.v[0]];
+                const Vec3 ev = obj.mesh.vertices[e.v[1]] - v0;
+                const double t = glm::clamp(glm::dot(wa - v0, ev) / glm::dot(ev, ev), 0.0, 1.0);
+                if (glm::length(wa - (v0 + t * ev)) > kOffFeature) continue;
                 for (uint32_t tri : e.tri)
                     if (signed_to_plane(obj, tri, wa) >= -kBackFace) add_atom(w, vf_atom(k.object, k.a, tri));
             } else {
-                add_disjunction(model, w, k.object, k.a, wa, e.tri.data(), 2);
+                // Convex edge (Types 2, 8): the face the vertex is in front of while it rests on
+                // the edge; the edge's own plane while it is clearly off it.
+                const Vec3& v0 = obj.mesh.vertices[e.v[0]];
+                const Vec3 ev = obj.mesh.vertices[e.v[1]] - v0;
+                const double t = glm::clamp(glm::dot(wa - v0, ev) / glm::dot(ev, ev), 0.0, 1.0);
+                const Vec3 c = v0 + t * ev;
+                const Vec3 u = wa - c;
+                if (glm::length(u) <= kOffFeature || t <= 0.0 || t >= 1.0) {
+                    add_disjunction(model, w, k.object, k.a, wa, e.tri.data(), 2);
+                } else {
+                    // Only in the edge's normal cone (between its faces' normals) is the edge the
+                    // nearest feature; elsewhere the point is over a face, which holds it.
+                    const Vec3& n1 = obj.topology.triangle_normals[e.tri[0]];
+                    const Vec3& n2 = obj.topology.triangle_normals[e.tri[1]];
+                    const double k12 = glm::dot(n1, n2), u1 = glm::dot(u, n1), u2 = glm::dot(u, n2);
+                    if (u1 - k12 * u2 >= 0.0 && u2 - k12 * u1 >= 0.0)
+                        add_feature_plane(w, k.object, k.a, wa, c, e.v[0], u1 >= u2 ? e.tri[0] : e.tri[1]);
+                }
             }
         } else {
             const auto& topo = obj.topology;
@@ -361,9 +404,16 @@ void gather_atoms(const Model& model, double reach, Workspace& w) {
             const uint32_t* tris = topo.vertex_triangles.data() + topo.vertex_triangle_offsets[k.id];
             const int count = static_cast<int>(topo.vertex_triangle_offsets[k.id + 1] - topo.vertex_triangle_offsets[k.id]);
             if (topo.vertex_convexity[k.id] == Convexity::Concave) {
-                // eq. 8: every face around a concave vertex (Type 4).
+                // eq. 8: every face around a concave vertex (Type 4), for a vertex resting in it.
+                if (glm::length(wa - obj.mesh.vertices[k.id]) > kOffFeature) continue;
                 for (int j = 0; j < count; ++j)
                     if (signed_to_plane(obj, tris[j], wa) >= -kBackFace) add_atom(w, vf_atom(k.object, k.a, tris[j]));
+            } else if (glm::length(wa - obj.mesh.vertices[k.id]) > kOffFeature) {
+                // Clearly off the vertex, in its Voronoi cone (Type 9): its own plane.
+                int best = 0;
+                for (int j = 1; j < count; ++j)
+                    if (signed_to_plane(obj, tris[j], wa) > signed_to_plane(obj, tris[best], wa)) best = j;
+                add_feature_plane(w, k.object, k.a, wa, obj.mesh.vertices[k.id], k.id, tris[best]);
             } else {
                 add_disjunction(model, w, k.object, k.a, wa, tris, count);
             }
