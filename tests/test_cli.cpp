@@ -199,6 +199,14 @@ TEST_F(Cli, FirstPosePenetrates) {
     expect_bad("p.json", "pen.csv", "penetrates");
 }
 
+TEST_F(Cli, NonConvexTool) {
+    const std::vector<Vec2> ell = {{0, 0}, {0.01, 0}, {0.01, 0.004}, {0.004, 0.004}, {0.004, 0.01}, {0, 0.01}};
+    std::string err;
+    ASSERT_TRUE(write_obj(make_extruded_polygon(ell, 0.02, 0.03), (dir / "ell.obj").string(), &err));
+    write_scene("c.json", "ell.obj", "floor.obj", "traj.csv");
+    expect_bad("c.json", "c.json", "not convex");
+}
+
 TEST_F(Cli, UsageErrors) {
     EXPECT_EQ(run_cli("", dir).status, 2);
     EXPECT_EQ(run_cli("frobnicate", dir).status, 2);
