@@ -543,6 +543,24 @@ void add_separating_plane(const Model& model, const NearTri& nt, double reach, W
     }
 }
 
+// The step's coordinates in the frame of the tool at its last graphic pose: y = F^T x with
+// F = diag(R0, R0). M of eq. 3 is isotropic in each block, so the energy is the same in either;
+// the box of eq. 5 drawn in this frame turns with the tool and the scene, so a rigid motion of the
+// whole scene changes nothing (a box on the world axes would).
+void to_frame(const Mat3& R0, const double x[6], double y[6]) {
+    const Vec3 p = glm::transpose(R0) * Vec3(x[0], x[1], x[2]);
+    const Vec3 t = glm::transpose(R0) * Vec3(x[3], x[4], x[5]);
+    y[0] = p.x; y[1] = p.y; y[2] = p.z;
+    y[3] = t.x; y[4] = t.y; y[5] = t.z;
+}
+
+void from_frame(const Mat3& R0, const double y[6], double x[6]) {
+    const Vec3 p = R0 * Vec3(y[0], y[1], y[2]);
+    const Vec3 t = R0 * Vec3(y[3], y[4], y[5]);
+    x[0] = p.x; x[1] = p.y; x[2] = p.z;
+    x[3] = t.x; x[4] = t.y; x[5] = t.z;
+}
+
 // The local-solution box of eq. 5 about the last graphic pose (x = 0). The paper's box holds each
 // coordinate between 0 and the haptic pose's. The default keeps only the side that stops a
 // coordinate moving away from the haptic pose; on the far side it adds the bound every solution
@@ -554,21 +572,44 @@ void add_separating_plane(const Model& model, const NearTri& nt, double reach, W
 // bounds |x - dh| by |dh| + margin (Minkowski), hence the force change by K_t (|dh| + margin).
 // x = 0 (staying) is always inside.
 void local_box(const RendererSettings& S, double tool_radius, const double target[6], const Vec3& haptic_motion,
-               double haptic_turn, const Vec3& moved, bool limit_rate, double recover_m, double lower[6],
-               double upper[6]) {
+               const Vec3& haptic_rotation, const Vec3& moved, const Vec3& turned, bool limit_rate,
+               double recover_m, double lower[6], double upper[6]) {
+    const double haptic_turn = glm::length(haptic_rotation);
     const HapticSettings& h = S.haptic;
     double e0 = 0.0;
     for (int j = 0; j < 6; ++j) e0 += 0.5 * (j < 3 ? h.weight_translational : h.weight_rotational) * target[j] * target[j];
     for (int j = 0; j < 6; ++j) {
         const double t = target[j];
-        double slack = 0.0;
-        if (S.local_box == LocalBox::TowardHaptic)
-            slack = std::sqrt(2.0 * e0 / (j < 3 ? h.weight_translational : h.weight_rotational));
+        // Every solution has at most the energy of x = 0, which is feasible: no coordinate
+        // moves further than this from the haptic pose's value.
+        const double slack = std::sqrt(2.0 * e0 / (j < 3 ? h.weight_translational : h.weight_rotational));
         // A last pose inside the tolerance (a graze of up to constraint_tol_m) may need a step
         // away from the haptic pose to come out: then every coordinate gets that much room.
         const double recover = j < 3 ? recover_m : recover_m / tool_radius;
-        lower[j] = (t < 0.0 ? t - slack : 0.0) - recover;
-        upper[j] = (t > 0.0 ? t + slack : 0.0) + recover;
+        switch (S.local_box) {
+            case LocalBox::Paper:  // between the last pose (0) and the haptic pose
+                lower[j] = std::min(0.0, t);
+                upper[j] = std::max(0.0, t);
+                break;
+            case LocalBox::TowardHaptic:  // never away from the haptic pose
+                lower[j] = t < 0.0 ? t - slack : 0.0;
+                upper[j] = t > 0.0 ? t + slack : 0.0;
+                break;
+            case LocalBox::None:  // only the energy bound, which every solution meets anyway
+                lower[j] = std::min(0.0, t - slack);
+                upper[j] = std::max(0.0, t + slack);
+                break;
+        }
+        lower[j] -= recover;
+        upper[j] += recover;
+        if (limit_rate && j >= 3 && S.force_step_margin_m > 0.0) {
+            // The same limit on turning, per tick: the haptic tool's own turn plus the margin
+            // over the tool radius (keeps the torque continuous and the step's reach small).
+            const double dh = haptic_rotation[j - 3];
+            const double c = S.force_step_margin_m / tool_radius / std::sqrt(3.0);
+            lower[j] = std::min(std::max(lower[j], dh - std::abs(dh) - c - turned[j - 3]), 0.0);
+            upper[j] = std::max(std::min(upper[j], dh + std::abs(dh) + c - turned[j - 3]), 0.0);
+        }
         if (limit_rate && j < 3 && S.force_step_margin_m > 0.0) {
             const double dh = haptic_motion[j];
             // The haptic tool's turn moves its points by up to radius * turn: contacts may move
@@ -585,6 +626,18 @@ void local_box(const RendererSettings& S, double tool_radius, const double targe
     }
 }
 
+// How far any tool point can move within a box of the step's coordinates (rotation about the
+// tool origin), plus the contact distance and room for the tolerance.
+double box_reach(const RendererSettings& S, double tool_radius, const double lower[6], const double upper[6]) {
+    double move2 = 0.0, turn2 = 0.0;
+    for (int j = 0; j < 6; ++j) {
+        const double m = std::max(std::abs(lower[j]), std::abs(upper[j]));
+        (j < 3 ? move2 : turn2) += m * m;
+    }
+    const double move = std::sqrt(move2), turn = std::sqrt(turn2);
+    return move + turn * (tool_radius + move) + S.contact_distance_m + 20.0 * S.constraint_tol_m;
+}
+
 bool inside_box(const double x[6], const double lower[6], const double upper[6]) {
     for (int j = 0; j < 6; ++j)
         if (x[j] < lower[j] || x[j] > upper[j]) return false;
@@ -592,16 +645,17 @@ bool inside_box(const double x[6], const double lower[6], const double upper[6])
 }
 
 // solve: one candidate set by sequential linearization (re-linearize until exact).
-CandidateResult solve_candidate(const Model& model, const Pose& base, const double target[6], const double lower[6],
-                                const double upper[6], double reach, const Atom* previous, int previous_count,
-                                Workspace& w, StepStats& stats) {
+CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3& frame, const double target[6],
+                                const double target_local[6], const double lower[6], const double upper[6],
+                                double reach, const Atom* previous, int previous_count, Workspace& w,
+                                StepStats& stats) {
     const RendererSettings& S = model.settings;
     const HapticSettings& h = S.haptic;
     CandidateResult r;
     qp::Problem& P = w.problem;
     for (int j = 0; j < 6; ++j) {
         P.weight[j] = j < 3 ? h.weight_translational : h.weight_rotational;
-        P.target[j] = target[j];
+        P.target[j] = target_local[j];
         P.lower[j] = lower[j];
         P.upper[j] = upper[j];
     }
@@ -623,10 +677,10 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const doub
             double grad[6];
             const double g = evaluate_atom(model, w.cand[i], at, grad);
             double gx = 0.0;
-            for (int j = 0; j < 6; ++j) {
-                P.a[i][j] = grad[j];
-                gx += grad[j] * x[j];
-            }
+            for (int j = 0; j < 6; ++j) gx += grad[j] * x[j];
+            // The QP works in the frame of the last graphic pose (x = F y, F = diag(R0, R0)):
+            // grad . x = (F^T grad) . y.
+            to_frame(frame, grad, P.a[i]);
             // g(x_k) + grad . (x - x_k) >= 0
             P.b[i] = gx - g;
         }
@@ -637,7 +691,12 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const doub
         if (st != qp::Status::Optimal) return r;
         w.warm.count = w.solution.active_count;
         for (int k = 0; k < w.solution.active_count; ++k) w.warm.active[k] = w.solution.active[k];
-        for (int j = 0; j < 6; ++j) x[j] = w.solution.x[j];
+        if (w.solution.active_count == 0) {
+            // Nothing holds the tool: exactly the target (no rounding through the frame).
+            for (int j = 0; j < 6; ++j) x[j] = target[j];
+        } else {
+            from_frame(frame, w.solution.x, x);
+        }
 
         // The exact constraint error at the new pose: no atom violated, and the atoms the QP
         // holds active really touch (no gap left by the linearization).
@@ -711,9 +770,9 @@ Vec3 contact_point(const Model& model, const Atom& a, const ToolPoseAt& t) {
 
 // solve + select: every candidate set within the box; the feasible one of least energy wins
 // (ties keep the lower index, for determinism). Leaves the winner's atoms in w.best.
-bool solve_candidates(const Model& model, const Pose& base, const double target[6], const double lower[6],
-                      const double upper[6], double reach, const State& state, Workspace& w, StepStats& stats,
-                      double x_out[6]) {
+bool solve_candidates(const Model& model, const Pose& base, const Mat3& frame, const double target[6],
+                      const double target_local[6], const double lower[6], const double upper[6], double reach,
+                      const State& state, Workspace& w, StepStats& stats, double x_out[6]) {
     const int candidates = std::min(1 + w.alt_count, std::max(1, model.settings.max_candidates));
     double best_energy = 1e300;
     bool found = false;
@@ -722,7 +781,8 @@ bool solve_candidates(const Model& model, const Pose& base, const double target[
         std::copy(w.atoms, w.atoms + w.atom_count, w.cand);
         if (c > 0) w.cand[w.alts[c - 1].replace] = w.alts[c - 1].atom;
         const CandidateResult cr =
-            solve_candidate(model, base, target, lower, upper, reach, state.active, state.active_count, w, stats);
+            solve_candidate(model, base, frame, target, target_local, lower, upper, reach, state.active,
+                            state.active_count, w, stats);
         ++stats.candidates;
         if (cr.ok && cr.energy < best_energy) {
             best_energy = cr.energy;
@@ -866,14 +926,14 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
         return res;
     }
     const Vec3 haptic_motion = haptic.position - state.last_haptic.position;
-    const double haptic_turn =
-        glm::length(quat_log(haptic.orientation * glm::conjugate(state.last_haptic.orientation)));
+    const Vec3 haptic_rotation = quat_log(haptic.orientation * glm::conjugate(state.last_haptic.orientation));
     const double radius = std::max(model.tool.radius_m, 1e-6);
     Pose base = state.graphic;
-    Vec3 moved(0.0);  // translation of earlier passes of this tick
+    Vec3 moved(0.0);   // translation of earlier passes of this tick
+    Vec3 turned(0.0);  // their rotation (sum of rotation vectors: a first-order account)
 
     double scale = 1.0;
-    double xh[6], target[6], lower[6], upper[6];
+    double xh[6], target[6], target_local[6], lower[6], upper[6];
     double reach = 0.0;
     bool solved = false;
     double x_sol[6] = {0, 0, 0, 0, 0, 0};
@@ -887,6 +947,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
         if (pass > 0) {
             const ToolPoseAt at = tool_pose_at(base, x_sol);
             moved += at.p - base.position;
+            turned += Vec3(x_sol[3], x_sol[4], x_sol[5]);
             base.position = at.p;
             base.orientation = at.q;
             solved = false;
@@ -902,34 +963,57 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
         for (size_t i = 0; i < nv; ++i) w.tool_world[i] = base.apply(model.tool.mesh.vertices[i]);
         set_tool_planes(model, base.orientation, base.position, w);
 
+        // The step's coordinates: eq. 5 as printed on the world axes; otherwise in the frame of
+        // the tool at the last graphic pose, one frame for every pass of the tick (so the
+        // per-axis boxes of successive passes bound the same total motion).
+        const Mat3 frame = S.local_box == LocalBox::Paper ? Mat3(1.0) : glm::mat3_cast(state.graphic.orientation);
+        const Vec3 motion_local = glm::transpose(frame) * haptic_motion;
+        const Vec3 rotation_local = glm::transpose(frame) * haptic_rotation;
+        const Vec3 moved_local = glm::transpose(frame) * moved;
+        const Vec3 turned_local = glm::transpose(frame) * turned;
         for (int attempt = 0; attempt <= kMaxHalvings && !solved; ++attempt) {
             auto t0 = Clock::now();
             for (int j = 0; j < 6; ++j) target[j] = scale * xh[j];
-            // The box of eq. 5 sets the reach; the force-continuity limit narrows it in contact.
-            local_box(S, radius, target, haptic_motion, haptic_turn, moved, false, 0.0, lower, upper);
-            double move2 = 0.0, turn2 = 0.0;
-            for (int j = 0; j < 6; ++j) {
-                const double m = std::max(std::abs(lower[j]), std::abs(upper[j]));
-                (j < 3 ? move2 : turn2) += m * m;
+            to_frame(frame, target, target_local);
+            // The box of the step, and its force-continuity narrowing (used while in contact).
+            double rate_lower[6], rate_upper[6];
+            local_box(S, radius, target_local, motion_local, rotation_local, moved_local, turned_local, false, 0.0,
+                      lower, upper);
+            local_box(S, radius, target_local, motion_local, rotation_local, moved_local, turned_local, true, 0.0,
+                      rate_lower, rate_upper);
+            // Free motion: the straight motion to the haptic pose, clear all the way (CCD).
+            {
+                double zero[6] = {0, 0, 0, 0, 0, 0};
+                double straight_lo[6], straight_hi[6];
+                for (int j = 0; j < 6; ++j) {
+                    straight_lo[j] = std::min(zero[j], target_local[j]);
+                    straight_hi[j] = std::max(zero[j], target_local[j]);
+                }
+                reach = box_reach(S, model.tool.radius_m, straight_lo, straight_hi);
             }
-            const double move = std::sqrt(move2), turn = std::sqrt(turn2);
-            // No tool point moves further than this within the box.
-            reach = move + turn * (model.tool.radius_m + move) + S.contact_distance_m + 10.0 * S.constraint_tol_m;
             if (!gather_near(model, w.tool_world, reach, w)) {
                 scale *= 0.5;
                 stage_detect += micros(t0, Clock::now());
                 continue;
             }
-            res.stats.triangles_near = w.near_count;
-            if (pass == 0 && inside_box(target, lower, upper) &&
+            if (pass == 0 && inside_box(target_local, lower, upper) &&
                 (w.near_count == 0 ||
                  (state.active_count == 0 && motion_is_free(model, base, target, S.contact_distance_m, w)))) {
+                res.stats.triangles_near = w.near_count;
                 free_motion = true;
                 solved = true;
                 for (int j = 0; j < 6; ++j) x_sol[j] = target[j];
                 stage_detect += micros(t0, Clock::now());
                 break;
             }
+            // In contact: what the force-continuity box can reach.
+            reach = box_reach(S, model.tool.radius_m, rate_lower, rate_upper);
+            if (!gather_near(model, w.tool_world, reach, w)) {
+                scale *= 0.5;
+                stage_detect += micros(t0, Clock::now());
+                continue;
+            }
+            res.stats.triangles_near = w.near_count;
             t_detect_end = Clock::now();
             stage_detect += micros(t0, t_detect_end);
 
@@ -939,29 +1023,40 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             stage_gather += micros(t_detect_end, t_gather_end);
             res.stats.atoms_gathered = w.atom_count;
 
-            // ---- solve, select ---- with the force-continuity limit first; a tool that it would
-            // leave hanging short of contact instead goes as far as eq. 5 lets it (no force at a
-            // distance).
-            // The rate-limited box first; a tool it would leave hanging short of contact goes as
-            // far as eq. 5 lets it. A last pose inside the tolerance (a graze) may need a step away
-            // from the haptic pose to come out: only when nothing is feasible without it does
-            // every coordinate get that room, so it is never spent on getting closer.
-            double rate_lower[6], rate_upper[6];
+            // ---- solve, select ---- the force-continuity box first. A last pose inside the
+            // tolerance (a graze) may need a step away from the haptic pose to come out: only
+            // when nothing is feasible without it does every coordinate get that room, so it is
+            // never spent on getting closer.
             for (int round = 0; round < 2 && !solved; ++round) {
                 const double recover = round == 0 ? 0.0 : 10.0 * S.constraint_tol_m;
-                local_box(S, radius, target, haptic_motion, haptic_turn, moved, false, recover, lower, upper);
-                local_box(S, radius, target, haptic_motion, haptic_turn, moved, true, recover, rate_lower, rate_upper);
-                solved = solve_candidates(model, base, target, rate_lower, rate_upper, reach, state, w, res.stats, x_sol);
-                // Released only when it touches nothing at all: a contact held on an extended
-                // plane is taken on by another pass instead.
-                const ContactCheck cc = solved ? check_contacts(model, base, x_sol, w) : ContactCheck{};
-                if (solved && !cc.real && !cc.virtual_only) {
-                    bool at_target = true;
-                    for (int j = 0; j < 6 && at_target; ++j) at_target = x_sol[j] == target[j];
-                    if (!at_target) {
-                        res.stats.released = true;
-                        solved = solve_candidates(model, base, target, lower, upper, reach, state, w, res.stats, x_sol);
-                    }
+                local_box(S, radius, target_local, motion_local, rotation_local, moved_local, turned_local, true,
+                          recover, rate_lower, rate_upper);
+                solved = solve_candidates(model, base, frame, target, target_local, rate_lower, rate_upper, reach, state,
+                                          w, res.stats, x_sol);
+            }
+            // A tool the limit would leave touching nothing short of the haptic pose (a force at
+            // a distance) is released: it goes as far as the step's box lets it, which reaches
+            // further, so the triangles and atoms are gathered again. A contact held on an
+            // extended plane is taken on by another pass instead.
+            const ContactCheck cc = solved ? check_contacts(model, base, x_sol, w) : ContactCheck{};
+            bool at_target = solved;
+            for (int j = 0; j < 6 && at_target; ++j) at_target = x_sol[j] == target[j];
+            if (solved && !cc.real && !cc.virtual_only && !at_target) {
+                res.stats.released = true;
+                reach = box_reach(S, model.tool.radius_m, lower, upper);
+                if (!gather_near(model, w.tool_world, reach, w)) {
+                    solved = false;
+                    scale *= 0.5;
+                    continue;
+                }
+                gather_atoms(model, reach, w);
+                solved = false;
+                for (int round = 0; round < 2 && !solved; ++round) {
+                    const double recover = round == 0 ? 0.0 : 10.0 * S.constraint_tol_m;
+                    local_box(S, radius, target_local, motion_local, rotation_local, moved_local, turned_local, false,
+                              recover, lower, upper);
+                    solved = solve_candidates(model, base, frame, target, target_local, lower, upper, reach, state, w,
+                                              res.stats, x_sol);
                 }
             }
             stage_solve += micros(t_gather_end, Clock::now());

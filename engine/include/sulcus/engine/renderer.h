@@ -19,21 +19,25 @@
 
 namespace sulcus {
 
-// How the local-solution box of eq. 5 bounds each coordinate of the step.
+// How the coordinates of a step are boxed (the local-solution box of eq. 5 and alternatives).
 enum class LocalBox : uint8_t {
-    // Each coordinate moves from the last graphic pose towards the haptic pose, never away from
-    // it, but may pass the haptic pose's value. Overshooting along an incline makes the graphic
-    // tool jump at contact switches, so this is not the default.
-    TowardHaptic,
-    // Eq. 5 as printed: each coordinate between the last graphic pose and the haptic pose. Its far
-    // side is what keeps the graphic tool from jumping at contact switches; the force-continuity
-    // limit below bounds how fast it may slide down an incline.
+    // No coordinate box (the default). The step works in the frame of the tool at its last
+    // graphic pose, so it is invariant to any rigid motion of the whole scene. The local solution
+    // comes from the constraint sides fixed at the step's start, the force-continuity limit
+    // (bounded motion per tick) and the passes round features.
+    None,
+    // Eq. 5 as printed: each coordinate, on the world axes, between the last graphic pose and the
+    // haptic pose. It keeps the tool from jumping at contact switches in axis-aligned scenes, but
+    // a face inclined to the axes pins coordinates the tool must slide along, and the tool
+    // sticks while the force builds (docs/renderer.md).
     Paper,
+    // Eq. 5's near side only, in the tool frame: no coordinate moves away from the haptic pose.
+    TowardHaptic,
 };
 
 struct RendererSettings {
     HapticSettings haptic;
-    LocalBox local_box = LocalBox::Paper;
+    LocalBox local_box = LocalBox::None;
     // Force continuity: per tick the graphic tool's offset from the haptic tool may change by at
     // most the haptic tool's own motion (translation plus radius times turn) plus this, in
     // metres, so the force changes by at most
