@@ -1,7 +1,7 @@
 #include "ccd.h"
 
-#include "geometry.h"
 #include "so3.h"
+#include "tool_placement.h"
 
 #include <algorithm>
 #include <cmath>
@@ -16,14 +16,7 @@ CcdResult conservative_advancement(const Model& model, const Pose& base, const d
     const Vec3 th(x[3], x[4], x[5]);
     const double speed = glm::length(dp) + glm::length(th) * model.tool.radius_m;
     const ModelTool& tool = model.tool;
-    ConvexView view;
-    view.vertices = scratch.vertices;
-    view.vertex_count = static_cast<int>(tool.mesh.vertices.size());
-    view.normals = scratch.normals;
-    view.offsets = scratch.offsets;
-    view.face_count = static_cast<int>(tool.face_normals.size());
-    view.edges = reinterpret_cast<const uint32_t (*)[2]>(tool.edges.data());
-    view.edge_count = static_cast<int>(tool.edges.size());
+    const ConvexView view = tool_convex_view(tool, scratch.vertices, scratch.normals, scratch.offsets);
     const auto* tris = reinterpret_cast<const uint32_t (*)[3]>(tool.mesh.triangles.data());
     const int tri_count = static_cast<int>(tool.mesh.triangles.size());
     double tau = 0.0;
@@ -31,11 +24,8 @@ CcdResult conservative_advancement(const Model& model, const Pose& base, const d
         r.iterations = it + 1;
         const Quat q = glm::normalize(quat_exp(tau * th) * base.orientation);
         const Vec3 p = base.position + tau * dp;
-        for (int i = 0; i < view.vertex_count; ++i) scratch.vertices[i] = q * tool.mesh.vertices[i] + p;
-        for (int f = 0; f < view.face_count; ++f) {
-            scratch.normals[f] = q * tool.face_normals[f];
-            scratch.offsets[f] = tool.face_offsets[f] + glm::dot(scratch.normals[f], p);
-        }
+        place_tool_vertices(tool, q, p, scratch.vertices);
+        place_tool_planes(tool, q, p, scratch.normals, scratch.offsets);
         double d = 1e300;
         for (int i = 0; i < near_count; ++i) {
             const ModelObject& obj = model.objects[near[i].object];

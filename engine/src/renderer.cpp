@@ -24,6 +24,7 @@
 #include "contact_atoms.h"
 #include "geometry.h"
 #include "so3.h"
+#include "tool_placement.h"
 
 #include <algorithm>
 #include <chrono>
@@ -161,33 +162,12 @@ double energy_of(const HapticSettings& h, const double x[6], const double target
     return 0.5 * e;
 }
 
-// The tool placed at fraction tau of the straight motion from `base` by `x`.
-void place_tool(const Model& model, const Pose& base, const double x[6], double tau, Vec3* out) {
-    const Vec3 dp(x[0], x[1], x[2]);
-    const Vec3 th(x[3], x[4], x[5]);
-    const Quat q = glm::normalize(quat_exp(tau * th) * base.orientation);
-    const Vec3 p = base.position + tau * dp;
-    const auto& verts = model.tool.mesh.vertices;
-    for (size_t i = 0; i < verts.size(); ++i) out[i] = q * verts[i] + p;
-}
-
 ConvexView tool_view(const Model& model, const Vec3* world_vertices, const Workspace& w) {
-    ConvexView v;
-    v.vertices = world_vertices;
-    v.vertex_count = static_cast<int>(model.tool.mesh.vertices.size());
-    v.normals = w.face_n;
-    v.offsets = w.face_d;
-    v.face_count = static_cast<int>(model.tool.face_normals.size());
-    v.edges = reinterpret_cast<const uint32_t (*)[2]>(model.tool.edges.data());
-    v.edge_count = static_cast<int>(model.tool.edges.size());
-    return v;
+    return tool_convex_view(model.tool, world_vertices, w.face_n, w.face_d);
 }
 
 void set_tool_planes(const Model& model, const Quat& q, const Vec3& p, Workspace& w) {
-    for (size_t f = 0; f < model.tool.face_normals.size(); ++f) {
-        w.face_n[f] = q * model.tool.face_normals[f];
-        w.face_d[f] = model.tool.face_offsets[f] + glm::dot(w.face_n[f], p);
-    }
+    place_tool_planes(model.tool, q, p, w.face_n, w.face_d);
 }
 
 // detect: triangles whose boxes meet the tool's box inflated by `reach`. False on overflow.
@@ -714,11 +694,9 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         if (worst > S.constraint_tol_m) continue;
 
         // Guard: every triangle in reach must be separated from the tool at the new pose.
-        place_tool(model, base, x, 1.0, w.tool_moved);
-        const Vec3 th(x[3], x[4], x[5]);
-        const Quat q = glm::normalize(quat_exp(th) * base.orientation);
         // Planes at the new pose for the check, then restored to the start pose.
-        set_tool_planes(model, q, base.position + Vec3(x[0], x[1], x[2]), w);
+        place_tool_vertices(model.tool, nx.q, nx.p, w.tool_moved);
+        set_tool_planes(model, nx.q, nx.p, w);
         const ConvexView moved = tool_view(model, w.tool_moved, w);
         int missed = 0;
         NearTri missed_tris[8];
@@ -960,7 +938,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             xh[0] = dp.x; xh[1] = dp.y; xh[2] = dp.z;
             xh[3] = dt.x; xh[4] = dt.y; xh[5] = dt.z;
         }
-        for (size_t i = 0; i < nv; ++i) w.tool_world[i] = base.apply(model.tool.mesh.vertices[i]);
+        place_tool_vertices(model.tool, base.orientation, base.position, w.tool_world);
         set_tool_planes(model, base.orientation, base.position, w);
 
         // The step's coordinates: eq. 5 as printed on the world axes; otherwise in the frame of
@@ -981,30 +959,30 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                       lower, upper);
             local_box(S, radius, target_local, motion_local, rotation_local, moved_local, turned_local, true, 0.0,
                       rate_lower, rate_upper);
-            // Free motion: the straight motion to the haptic pose, clear all the way (CCD).
-            {
-                double zero[6] = {0, 0, 0, 0, 0, 0};
+            // Free motion (first pass only): the straight motion to the haptic pose, clear all
+            // the way (CCD).
+            if (pass == 0) {
                 double straight_lo[6], straight_hi[6];
                 for (int j = 0; j < 6; ++j) {
-                    straight_lo[j] = std::min(zero[j], target_local[j]);
-                    straight_hi[j] = std::max(zero[j], target_local[j]);
+                    straight_lo[j] = std::min(0.0, target_local[j]);
+                    straight_hi[j] = std::max(0.0, target_local[j]);
                 }
                 reach = box_reach(S, model.tool.radius_m, straight_lo, straight_hi);
-            }
-            if (!gather_near(model, w.tool_world, reach, w)) {
-                scale *= 0.5;
-                stage_detect += micros(t0, Clock::now());
-                continue;
-            }
-            if (pass == 0 && inside_box(target_local, lower, upper) &&
-                (w.near_count == 0 ||
-                 (state.active_count == 0 && motion_is_free(model, base, target, S.contact_distance_m, w)))) {
-                res.stats.triangles_near = w.near_count;
-                free_motion = true;
-                solved = true;
-                for (int j = 0; j < 6; ++j) x_sol[j] = target[j];
-                stage_detect += micros(t0, Clock::now());
-                break;
+                if (!gather_near(model, w.tool_world, reach, w)) {
+                    scale *= 0.5;
+                    stage_detect += micros(t0, Clock::now());
+                    continue;
+                }
+                if (inside_box(target_local, lower, upper) &&
+                    (w.near_count == 0 ||
+                     (state.active_count == 0 && motion_is_free(model, base, target, S.contact_distance_m, w)))) {
+                    res.stats.triangles_near = w.near_count;
+                    free_motion = true;
+                    solved = true;
+                    for (int j = 0; j < 6; ++j) x_sol[j] = target[j];
+                    stage_detect += micros(t0, Clock::now());
+                    break;
+                }
             }
             // In contact: what the force-continuity box can reach.
             reach = box_reach(S, model.tool.radius_m, rate_lower, rate_upper);

@@ -1,0 +1,35 @@
+// The convex tool placed in the world at a pose: its vertices, its face planes and the view of
+// it the separating-axis and distance tests take. Shared by the servo step and the CCD.
+#pragma once
+
+#include "geometry.h"
+#include "sulcus/engine/renderer.h"
+
+namespace sulcus {
+
+inline void place_tool_vertices(const ModelTool& tool, const Quat& q, const Vec3& p, Vec3* vertices) {
+    for (size_t i = 0; i < tool.mesh.vertices.size(); ++i) vertices[i] = q * tool.mesh.vertices[i] + p;
+}
+
+// Face planes in the world: n . x <= d inside.
+inline void place_tool_planes(const ModelTool& tool, const Quat& q, const Vec3& p, Vec3* normals, double* offsets) {
+    for (size_t f = 0; f < tool.face_normals.size(); ++f) {
+        normals[f] = q * tool.face_normals[f];
+        offsets[f] = tool.face_offsets[f] + glm::dot(normals[f], p);
+    }
+}
+
+inline ConvexView tool_convex_view(const ModelTool& tool, const Vec3* vertices, const Vec3* normals,
+                                   const double* offsets) {
+    ConvexView v;
+    v.vertices = vertices;
+    v.vertex_count = static_cast<int>(tool.mesh.vertices.size());
+    v.normals = normals;
+    v.offsets = offsets;
+    v.face_count = static_cast<int>(tool.face_normals.size());
+    v.edges = reinterpret_cast<const uint32_t (*)[2]>(tool.edges.data());
+    v.edge_count = static_cast<int>(tool.edges.size());
+    return v;
+}
+
+}  // namespace sulcus
