@@ -90,7 +90,7 @@ TEST(Decimate, StaysClosedAndWithinTheErrorBound) {
     const TriMesh fine = polygonize([&](const Vec3& p) { return sphere(p, Vec3(0.0), r); },
                                     Aabb{Vec3(-4e-3), Vec3(4e-3)}, PolygonizeSettings{1.5e-4, 24});
     const double tol = 2e-5;
-    const TriMesh coarse = decimate(fine, DecimateSettings{tol, 0, 0.5, 0.0});
+    const TriMesh coarse = decimate(fine, DecimateSettings{tol, 0, 0.5, 20.0});
     ASSERT_EQ(validate_mesh(coarse), "");
     EXPECT_EQ(euler_characteristic(coarse), 2);
     EXPECT_LT(coarse.triangles.size(), fine.triangles.size() / 3);
@@ -101,7 +101,7 @@ TEST(Decimate, StaysClosedAndWithinTheErrorBound) {
 TEST(Decimate, StopsAtTheTargetCount) {
     const TriMesh fine = polygonize([&](const Vec3& p) { return torus(p, 3e-3, 1e-3); },
                                     Aabb{Vec3(-5e-3), Vec3(5e-3)}, PolygonizeSettings{2e-4, 24});
-    const TriMesh coarse = decimate(fine, DecimateSettings{1.0, 2000, 1.0, 0.0});
+    const TriMesh coarse = decimate(fine, DecimateSettings{1.0, 2000, 1.0, 20.0});
     ASSERT_EQ(validate_mesh(coarse), "");
     EXPECT_LE(coarse.triangles.size(), 2002u);
     EXPECT_EQ(euler_characteristic(coarse), 0);

@@ -6,7 +6,8 @@
 #include <OpenMesh/Tools/Decimater/DecimaterT.hh>
 #include <OpenMesh/Tools/Decimater/ModAspectRatioT.hh>
 #include <OpenMesh/Tools/Decimater/ModNormalFlippingT.hh>
-#include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
+#include <OpenMesh/Core/Geometry/QuadricT.hh>
+#include <OpenMesh/Tools/Decimater/ModBaseT.hh>
 
 #include <cmath>
 #include <stdexcept>
@@ -25,6 +26,55 @@ struct OmTraits : public OpenMesh::DefaultTraits {
 };
 using OmMesh = OpenMesh::TriMesh_ArrayKernelT<OmTraits>;
 
+// Quadric error without area weights: the error of a vertex is the sum of its squared distances to
+// the planes of all original triangles merged into it, so an error below tol^2 keeps the vertex
+// within tol of every one of those planes. (OpenMesh's ModQuadricT weights each plane by its
+// triangle's area, which makes its bound a function of the mesh's scale and density.)
+class ModPlaneDistance : public OpenMesh::Decimater::ModBaseT<OmMesh> {
+public:
+    using Self = ModPlaneDistance;
+    using Handle = OpenMesh::Decimater::ModHandleT<Self>;
+    using Base = OpenMesh::Decimater::ModBaseT<OmMesh>;
+    using Mesh = Base::Mesh;
+    using CollapseInfo = Base::CollapseInfo;
+    DECIMATER_MODNAME(PlaneDistance)
+    explicit ModPlaneDistance(OmMesh& mesh) : Base(mesh, false) { mesh.add_property(quadrics_); }
+    ~ModPlaneDistance() override { Base::mesh().remove_property(quadrics_); }
+
+    void set_max_distance(double d) { max_err_ = d * d; }
+
+    void initialize() override {
+        OmMesh& m = Base::mesh();
+        for (const auto& v : m.vertices()) m.property(quadrics_, v).clear();
+        for (const auto& f : m.faces()) {
+            auto fv = m.cfv_iter(f);
+            const OmMesh::Point p0 = m.point(*fv), p1 = m.point(*++fv), p2 = m.point(*++fv);
+            OmMesh::Point n = (p1 - p0) % (p2 - p0);
+            const double len = n.norm();
+            if (!(len > 0.0)) continue;
+            n /= len;
+            const Quadric q(n[0], n[1], n[2], -(n | p0));
+            for (const auto& v : m.fv_range(f)) m.property(quadrics_, v) += q;
+        }
+    }
+
+    float collapse_priority(const CollapseInfo& ci) override {
+        Quadric q = Base::mesh().property(quadrics_, ci.v0);
+        q += Base::mesh().property(quadrics_, ci.v1);
+        const double err = q(ci.p1);
+        return err < max_err_ ? float(err / max_err_) : float(Base::ILLEGAL_COLLAPSE);
+    }
+
+    void postprocess_collapse(const CollapseInfo& ci) override {
+        Base::mesh().property(quadrics_, ci.v1) += Base::mesh().property(quadrics_, ci.v0);
+    }
+
+private:
+    using Quadric = OpenMesh::Geometry::QuadricT<double>;
+    OpenMesh::VPropHandleT<Quadric> quadrics_;
+    double max_err_ = 0.0;
+};
+
 }  // namespace
 
 TriMesh decimate(const TriMesh& mesh, const DecimateSettings& settings) {
@@ -40,20 +90,17 @@ TriMesh decimate(const TriMesh& mesh, const DecimateSettings& settings) {
 
     using Decimater = OpenMesh::Decimater::DecimaterT<OmMesh>;
     Decimater dec(om);
-    OpenMesh::Decimater::ModQuadricT<OmMesh>::Handle quadric;
+    ModPlaneDistance::Handle quadric;
     OpenMesh::Decimater::ModNormalFlippingT<OmMesh>::Handle flipping;
     OpenMesh::Decimater::ModAspectRatioT<OmMesh>::Handle aspect;
     dec.add(quadric);
     dec.add(flipping);
-    // The quadric error of a collapse is the sum of squared distances of the new vertex to the
-    // planes of the original triangles around it: bounding it bounds how far the surface moves.
-    dec.module(quadric).set_max_err(settings.max_error_m * settings.max_error_m, false);
+    dec.module(quadric).set_max_distance(settings.max_error_m);
     dec.module(flipping).set_max_normal_deviation(settings.max_normal_change_rad * 180.0 / M_PI);
-    if (settings.min_aspect > 0.0) {
-        dec.add(aspect);
-        dec.module(aspect).set_aspect_ratio(settings.min_aspect);
-        dec.module(aspect).set_binary(true);
-    }
+    // No collapse may leave a sliver worse than this (length over height), unless it improves one.
+    dec.add(aspect);
+    dec.module(aspect).set_aspect_ratio(settings.max_aspect > 0.0 ? settings.max_aspect : 20.0);
+    dec.module(aspect).set_binary(true);
     if (!dec.initialize()) throw std::invalid_argument("decimate: could not set up the decimater");
     if (settings.target_triangles > 0)
         dec.decimate_to_faces(0, settings.target_triangles);

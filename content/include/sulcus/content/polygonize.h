@@ -33,13 +33,13 @@ struct DecimateSettings {
     double max_error_m = 1e-5;        // largest allowed distance of the coarse surface from the fine one
     size_t target_triangles = 0;      // stop at this many triangles (0 = only the error bound stops it)
     double max_normal_change_rad = 0.5;  // a collapse may not turn any triangle's normal by more
-    double min_aspect = 0.0;          // if > 0, reject collapses creating triangles with a worse aspect
+    double max_aspect = 20.0;         // no collapse may create a triangle longer than this times its height
 };
 
-// Edge-collapse decimation (OpenMesh's decimater: quadric error as priority and bound, no normal
-// turned by more than max_normal_change_rad). Keeps the mesh closed, manifold and oriented; the
-// quadric bound keeps each new vertex within max_error_m of the planes of the triangles it
-// replaces, which holds the surface to about that distance from the input.
+// Edge-collapse decimation (OpenMesh's decimater with an unweighted plane-distance quadric as
+// priority and bound, no normal turned by more than max_normal_change_rad, no new slivers). Keeps
+// the mesh closed, manifold and oriented; every vertex stays within max_error_m of the planes of
+// all the original triangles merged into it, which holds the surface to about that distance.
 TriMesh decimate(const TriMesh& mesh, const DecimateSettings& settings);
 
 // Smooth minimum / maximum of two distance-like fields with blend radius k (metres): union and
