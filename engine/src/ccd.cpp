@@ -16,7 +16,8 @@ CcdResult conservative_advancement(const Model& model, const Pose& base, const d
     const Vec3 th(x[3], x[4], x[5]);
     const double speed = glm::length(dp) + glm::length(th) * model.tool.radius_m;
     const ModelTool& tool = model.tool;
-    const ConvexView view = tool_convex_view(tool, scratch.vertices, scratch.normals, scratch.offsets);
+    const ConvexView view = tool_convex_view(tool, scratch.vertices, scratch.normals, scratch.offsets, scratch.rotation,
+                                             scratch.capsule);
     const auto* tris = reinterpret_cast<const uint32_t (*)[3]>(tool.mesh.triangles.data());
     const int tri_count = static_cast<int>(tool.mesh.triangles.size());
     double tau = 0.0;
@@ -26,12 +27,14 @@ CcdResult conservative_advancement(const Model& model, const Pose& base, const d
         const Vec3 p = base.position + tau * dp;
         place_tool_vertices(tool, q, p, scratch.vertices);
         place_tool_planes(tool, q, p, scratch.normals, scratch.offsets);
+        *scratch.rotation = q;
+        place_tool_capsule(tool, q, p, scratch.capsule);
         double d = 1e300;
         for (int i = 0; i < near_count; ++i) {
             const ModelObject& obj = model.objects[near[i].object];
             const auto& t = obj.mesh.triangles[near[i].tri];
             d = std::min(d, distance_convex_triangle(view, tris, tri_count, obj.mesh.vertices[t[0]],
-                                                     obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]));
+                                                     obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]], d));
             if (d <= clearance) {
                 r.hit = true;
                 r.toi = tau;

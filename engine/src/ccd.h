@@ -18,6 +18,8 @@ struct CcdScratch {
     Vec3* vertices;     // tool vertex count
     Vec3* normals;      // tool face count
     double* offsets;    // tool face count
+    Quat* rotation;     // the rotation the planes are placed with
+    Vec3* capsule;      // 2: the bounding capsule at that pose
 };
 
 struct CcdResult {

@@ -105,9 +105,7 @@ inline double axis_separation(const ConvexView& poly, const Vec3& n, const Vec3&
 SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c) {
     SatResult best;
     best.separation = -1e300;
-    auto consider = [&](const Vec3& axis, int kind, int index) {
-        double sign = 1.0;
-        const double s = axis_separation(poly, axis, a, b, c, sign);
+    auto keep = [&](double s, double sign, const Vec3& axis, int kind, int index) {
         if (s > best.separation) {
             best.separation = s;
             best.axis = sign * axis;
@@ -115,18 +113,68 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
             best.index = index;
         }
     };
+    auto consider = [&](const Vec3& axis, int kind, int index) {
+        double sign = 1.0;
+        const double s = axis_separation(poly, axis, a, b, c, sign);
+        keep(s, sign, axis, kind, index);
+    };
     const Vec3 tn = glm::cross(b - a, c - a);
     const double tl = glm::length(tn);
     if (tl > 0.0) consider(tn / tl, 0, 0);
-    for (int f = 0; f < poly.face_count; ++f) consider(poly.normals[f], 1, f);
+    const bool fast = poly.depths && poly.edge_normals && poly.rotation;
+    for (int f = 0; f < poly.face_count; ++f) {
+        if (!fast) {
+            consider(poly.normals[f], 1, f);
+            continue;
+        }
+        // The polytope spans [offset - depth, offset] along its own face normal.
+        const Vec3& n = poly.normals[f];
+        const double pmax = poly.offsets[f], pmin = pmax - poly.depths[f];
+        const double ta = glm::dot(n, a), tb = glm::dot(n, b), tc = glm::dot(n, c);
+        const double pos = pmin - std::max(ta, std::max(tb, tc)), neg = std::min(ta, std::min(tb, tc)) - pmax;
+        keep(std::max(pos, neg), pos >= neg ? 1.0 : -1.0, n, 1, f);
+    }
     const Vec3 te[3] = {b - a, c - b, a - c};
+    // Edge pairs: only those that form a face of the Minkowski difference can be the separating
+    // axis of least overlap (their arcs on the Gauss map cross). The triangle's edge k maps to the
+    // half great circle of normals perpendicular to it on its outer side; the polytope's edge to the
+    // arc between its two face normals. Tested in the polytope's frame.
+    Vec3 e_local[3], out_local[3];
+    if (fast && tl > 0.0) {
+        const Quat inv = glm::conjugate(*poly.rotation);
+        for (int k = 0; k < 3; ++k) {
+            e_local[k] = inv * te[k];
+            out_local[k] = inv * glm::cross(te[k], tn);
+        }
+    }
     for (int k = 0; k < 3; ++k) {
+        const double scale_e = glm::length(te[k]);
         for (int e = 0; e < poly.edge_count; ++e) {
+            Vec3 x(0.0);
+            if (fast && tl > 0.0) {
+                const Vec3& n1 = poly.edge_normals[e][0];
+                const Vec3& n2 = poly.edge_normals[e][1];
+                const double al = glm::dot(n1, e_local[k]), be = glm::dot(n2, e_local[k]);
+                const double tol = 1e-12 * scale_e;
+                if ((al > tol && be > tol) || (al < -tol && be < -tol)) continue;
+                x = std::abs(be) * n1 + std::abs(al) * n2;
+                if (glm::dot(x, out_local[k]) > 1e-9 * glm::length(x) * glm::length(out_local[k])) continue;
+            }
             const Vec3 pe = poly.vertices[poly.edges[e][1]] - poly.vertices[poly.edges[e][0]];
             const Vec3 u = glm::cross(te[k], pe);
             const double ul = glm::length(u);
             // Near-parallel edge pairs give no new axis: the face normals cover them.
-            if (ul <= 1e-9 * glm::length(te[k]) * glm::length(pe)) continue;
+            if (ul <= 1e-9 * scale_e * glm::length(pe)) continue;
+            if (fast && tl > 0.0 && glm::length(x) > 0.0) {
+                // A face of the Minkowski difference: along its normal (x, in the edge's normal
+                // cone) the polytope reaches farthest at this edge, so its extent is one dot.
+                Vec3 n = u / ul;
+                if (glm::dot(n, *poly.rotation * x) < 0.0) n = -n;
+                const double pmax = glm::dot(n, poly.vertices[poly.edges[e][0]]);
+                const double tmin = std::min(glm::dot(n, a), std::min(glm::dot(n, b), glm::dot(n, c)));
+                keep(tmin - pmax, -1.0, n, 2, k * poly.edge_count + e);
+                continue;
+            }
             consider(u / ul, 2, k * poly.edge_count + e);
         }
     }
@@ -149,16 +197,48 @@ double triangle_triangle_distance(const Vec3 p[3], const Vec3 q[3]) {
 
 }  // namespace
 
+double segment_triangle_distance(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& b, const Vec3& c) {
+    const Vec3 n = glm::cross(b - a, c - a);
+    const double s0 = glm::dot(n, p0 - a), s1 = glm::dot(n, p1 - a);
+    if ((s0 <= 0.0 && s1 >= 0.0) || (s0 >= 0.0 && s1 <= 0.0)) {
+        // The segment meets the triangle's plane: inside the triangle means distance 0.
+        const double den = s0 - s1;
+        const Vec3 x = den != 0.0 ? p0 + (p1 - p0) * (s0 / den) : p0;
+        if (glm::dot(glm::cross(b - a, x - a), n) >= 0.0 && glm::dot(glm::cross(c - b, x - b), n) >= 0.0 &&
+            glm::dot(glm::cross(a - c, x - c), n) >= 0.0)
+            return 0.0;
+    }
+    double d = std::min(closest_on_triangle(p0, a, b, c).distance, closest_on_triangle(p1, a, b, c).distance);
+    d = std::min(d, closest_segments(p0, p1, a, b).distance);
+    d = std::min(d, closest_segments(p0, p1, b, c).distance);
+    d = std::min(d, closest_segments(p0, p1, c, a).distance);
+    return d;
+}
+
+double capsule_lower_bound(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c) {
+    if (!poly.capsule) return -1e300;
+    return segment_triangle_distance(poly.capsule[0], poly.capsule[1], a, b, c) - poly.capsule_radius;
+}
+
 double distance_convex_triangle(const ConvexView& poly, const uint32_t (*triangles)[3], int triangle_count,
-                                const Vec3& a, const Vec3& b, const Vec3& c) {
+                                const Vec3& a, const Vec3& b, const Vec3& c, double cutoff) {
+    const double lower = capsule_lower_bound(poly, a, b, c);
+    if (lower >= cutoff) return lower;
     // Overlap first: the separating-axis test is exact for convex against triangle.
     const SatResult sat = separate_convex_triangle(poly, a, b, c);
     if (sat.separation <= 0.0) return 0.0;
+    if (sat.separation >= cutoff) return sat.separation;  // also a lower bound
     const Vec3 q[3] = {a, b, c};
     double best = 1e300;
     for (int i = 0; i < triangle_count; ++i) {
         const Vec3 p[3] = {poly.vertices[triangles[i][0]], poly.vertices[triangles[i][1]],
                            poly.vertices[triangles[i][2]]};
+        // The closest point of a convex polytope lies on a face the triangle is (partly) in
+        // front of, or on that face's boundary, which a neighbouring face the triangle is in front
+        // of also holds.
+        const Vec3 n = glm::cross(p[1] - p[0], p[2] - p[0]);
+        const double d0 = glm::dot(n, p[0]);
+        if (glm::dot(n, a) <= d0 && glm::dot(n, b) <= d0 && glm::dot(n, c) <= d0) continue;
         best = std::min(best, triangle_triangle_distance(p, q));
     }
     return best;

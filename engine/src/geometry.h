@@ -36,7 +36,24 @@ struct ConvexView {
     int face_count = 0;
     const uint32_t (*edges)[2] = nullptr;
     int edge_count = 0;
+    // Optional, for the fast separating-axis test: the polytope's extent behind each face plane
+    // (offset minus the smallest projection of a vertex on the normal), the two face normals at
+    // each edge in the polytope's own frame, and the rotation of that frame into the world.
+    const double* depths = nullptr;
+    const Vec3 (*edge_normals)[2] = nullptr;
+    const Quat* rotation = nullptr;
+    // Optional bounding capsule (world segment capsule[0]-capsule[1], radius): every point of the
+    // polytope lies within capsule_radius of the segment. Gives cheap lower bounds on distance.
+    const Vec3* capsule = nullptr;
+    double capsule_radius = 0.0;
 };
+
+// Distance between segment p0-p1 and triangle (a, b, c); 0 when the segment crosses it.
+double segment_triangle_distance(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& b, const Vec3& c);
+
+// A lower bound on the distance between the polytope and the triangle from its bounding capsule
+// (-infinity without one); <= 0 says nothing.
+double capsule_lower_bound(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c);
 
 // Largest separation of the convex polytope and triangle (a, b, c) over the separating-axis
 // candidates (triangle normal, polytope face normals, edge cross products), in metres;
@@ -52,7 +69,9 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
 
 // Distance between the convex polytope (as its triangles) and a triangle: 0 when they touch or
 // overlap. `triangles` index poly.vertices.
+// With a bounding capsule, a lower bound of at least `cutoff` is returned as soon as it is known
+// (callers after the least distance over many triangles pass the least so far).
 double distance_convex_triangle(const ConvexView& poly, const uint32_t (*triangles)[3], int triangle_count,
-                                const Vec3& a, const Vec3& b, const Vec3& c);
+                                const Vec3& a, const Vec3& b, const Vec3& c, double cutoff = 1e300);
 
 }  // namespace sulcus

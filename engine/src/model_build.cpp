@@ -17,6 +17,37 @@ double mesh_scale(const TriMesh& m) {
     return std::max(s, 1e-9);
 }
 
+// The capsule around the principal axis of the vertices (power iteration on their covariance).
+void set_bounding_capsule(ModelTool& tool) {
+    const auto& vs = tool.mesh.vertices;
+    Vec3 c(0.0);
+    for (const Vec3& v : vs) c += v;
+    c /= double(vs.size());
+    glm::dmat3 cov(0.0);
+    for (const Vec3& v : vs) cov += glm::outerProduct(v - c, v - c);
+    Vec3 axis(1.0, 0.7, 0.3);
+    for (int it = 0; it < 64; ++it) {
+        const Vec3 next = cov * axis;
+        const double len = glm::length(next);
+        if (!(len > 0.0)) break;
+        axis = next / len;
+    }
+    axis = glm::normalize(axis);
+    double lo = 1e300, hi = -1e300;
+    for (const Vec3& v : vs) {
+        lo = std::min(lo, glm::dot(v - c, axis));
+        hi = std::max(hi, glm::dot(v - c, axis));
+    }
+    tool.capsule = {c + lo * axis, c + hi * axis};
+    double r = 0.0;
+    for (const Vec3& v : vs) {
+        const double t = std::clamp(glm::dot(v - c, axis), lo, hi);
+        r = std::max(r, glm::length(v - (c + t * axis)));
+    }
+    // A hair over, so rounding never puts a vertex outside.
+    tool.capsule_radius_m = r * (1.0 + 1e-9) + 1e-12;
+}
+
 std::string build_tool(const TriMesh& mesh, ModelTool& tool) {
     tool.mesh = mesh;
     tool.topology = build_topology(mesh);
@@ -46,9 +77,18 @@ std::string build_tool(const TriMesh& mesh, ModelTool& tool) {
                        " m outside face plane " + std::to_string(f);
         }
     }
+    for (size_t f = 0; f < tool.face_normals.size(); ++f) {
+        double lo = tool.face_offsets[f];
+        for (const Vec3& v : mesh.vertices) lo = std::min(lo, glm::dot(tool.face_normals[f], v));
+        tool.face_depths.push_back(tool.face_offsets[f] - lo);
+    }
     for (const MeshEdge& e : tool.topology.edges)
-        if (e.convexity != Convexity::Flat) tool.edges.push_back({e.v[0], e.v[1]});
+        if (e.convexity != Convexity::Flat) {
+            tool.edges.push_back({e.v[0], e.v[1]});
+            tool.edge_normals.push_back({tool.topology.triangle_normals[e.tri[0]], tool.topology.triangle_normals[e.tri[1]]});
+        }
     for (const Vec3& v : mesh.vertices) tool.radius_m = std::max(tool.radius_m, glm::length(v));
+    set_bounding_capsule(tool);
     return "";
 }
 

@@ -129,6 +129,8 @@ struct Workspace {
     Vec3 tool_moved[kMaxToolVertices];
     Vec3 face_n[kMaxToolFaces];
     double face_d[kMaxToolFaces];
+    Quat face_q{1.0, 0.0, 0.0, 0.0};  // the rotation face_n was placed with
+    Vec3 capsule[2];                   // the tool's bounding capsule at that pose
     NearTri near[kMaxNear];
     int near_count = 0;
     FeatureKey feats[kMaxFeatures];
@@ -163,11 +165,13 @@ double energy_of(const HapticSettings& h, const double x[6], const double target
 }
 
 ConvexView tool_view(const Model& model, const Vec3* world_vertices, const Workspace& w) {
-    return tool_convex_view(model.tool, world_vertices, w.face_n, w.face_d);
+    return tool_convex_view(model.tool, world_vertices, w.face_n, w.face_d, &w.face_q, w.capsule);
 }
 
 void set_tool_planes(const Model& model, const Quat& q, const Vec3& p, Workspace& w) {
     place_tool_planes(model.tool, q, p, w.face_n, w.face_d);
+    place_tool_capsule(model.tool, q, p, w.capsule);
+    w.face_q = q;
 }
 
 // detect: triangles whose boxes meet the tool's box inflated by `reach`. False on overflow.
@@ -194,7 +198,7 @@ bool gather_near(const Model& model, const Vec3* tool_world, double reach, Works
 // detect, free motion: true when the whole motion stays farther than `clearance` from every
 // triangle in reach.
 bool motion_is_free(const Model& model, const Pose& base, const double x[6], double clearance, Workspace& w) {
-    const CcdScratch scratch{w.tool_moved, w.face_n, w.face_d};
+    const CcdScratch scratch{w.tool_moved, w.face_n, w.face_d, &w.face_q, w.capsule};
     const CcdResult r = conservative_advancement(model, base, x, clearance, w.near, w.near_count,
                                                  kMaxCcdIterations, scratch);
     // The scratch planes held the moving tool; restore the start pose's planes.
@@ -703,6 +707,9 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         for (int i = 0; i < w.near_count && missed < 8; ++i) {
             const ModelObject& obj = model.objects[w.near[i].object];
             const auto& t = obj.mesh.triangles[w.near[i].tri];
+            if (capsule_lower_bound(moved, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]) >
+                0.0)
+                continue;  // clear of the tool's bounding capsule
             const SatResult s = separate_convex_triangle(moved, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
                                                          obj.mesh.vertices[t[2]]);
             if (s.separation < -S.constraint_tol_m) missed_tris[missed++] = w.near[i];

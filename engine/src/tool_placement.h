@@ -19,8 +19,15 @@ inline void place_tool_planes(const ModelTool& tool, const Quat& q, const Vec3& 
     }
 }
 
+// `rotation` (the tool's world orientation, kept current by the caller as the planes move)
+// enables the fast separating-axis test.
+inline void place_tool_capsule(const ModelTool& tool, const Quat& q, const Vec3& p, Vec3* ends) {
+    ends[0] = q * tool.capsule[0] + p;
+    ends[1] = q * tool.capsule[1] + p;
+}
+
 inline ConvexView tool_convex_view(const ModelTool& tool, const Vec3* vertices, const Vec3* normals,
-                                   const double* offsets) {
+                                   const double* offsets, const Quat* rotation, const Vec3* capsule = nullptr) {
     ConvexView v;
     v.vertices = vertices;
     v.vertex_count = static_cast<int>(tool.mesh.vertices.size());
@@ -29,6 +36,11 @@ inline ConvexView tool_convex_view(const ModelTool& tool, const Vec3* vertices, 
     v.face_count = static_cast<int>(tool.face_normals.size());
     v.edges = reinterpret_cast<const uint32_t (*)[2]>(tool.edges.data());
     v.edge_count = static_cast<int>(tool.edges.size());
+    v.depths = tool.face_depths.data();
+    v.edge_normals = reinterpret_cast<const Vec3 (*)[2]>(tool.edge_normals.data());
+    v.rotation = rotation;
+    v.capsule = capsule;
+    v.capsule_radius = tool.capsule_radius_m;
     return v;
 }
 

@@ -78,9 +78,16 @@ struct ModelTool {
     // (n . x = d on the plane, n . x <= d inside), local frame.
     std::vector<Vec3> face_normals;
     std::vector<double> face_offsets;
-    // Edges that are not flat (real edges of the convex polytope): vertex pairs.
+    // Extent of the tool behind each face plane: offset minus the smallest n . v over vertices.
+    std::vector<double> face_depths;
+    // Edges that are not flat (real edges of the convex polytope): vertex pairs, and the unit
+    // normals of the two triangles at each (local frame).
     std::vector<std::array<uint32_t, 2>> edges;
+    std::vector<std::array<Vec3, 2>> edge_normals;
     double radius_m = 0.0;  // largest distance from the local origin to a vertex
+    // Bounding capsule along the principal axis (local segment, radius): cheap distance bounds.
+    std::array<Vec3, 2> capsule{Vec3(0.0), Vec3(0.0)};
+    double capsule_radius_m = 0.0;
 };
 
 struct Model {

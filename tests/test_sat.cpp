@@ -1,0 +1,62 @@
+// The fast separating-axis test (face extents from the model, edge pairs pruned on the Gauss map)
+// against the plain one over every candidate axis.
+#include "geometry.h"
+#include "tool_placement.h"
+
+#include "sulcus/content/primitives.h"
+#include "sulcus/content/probes.h"
+#include "sulcus/engine/renderer.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace sulcus {
+namespace {
+
+void compare_on(const TriMesh& tool_mesh, double scale, int trials, unsigned seed) {
+    const ModelBuild mb = build_model(tool_mesh, {}, RendererSettings{});
+    ASSERT_TRUE(mb.model) << mb.error;
+    const ModelTool& tool = mb.model->tool;
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::vector<Vec3> verts(tool.mesh.vertices.size()), normals(tool.face_normals.size());
+    std::vector<double> offsets(tool.face_normals.size());
+    int overlapping = 0, separated = 0;
+    for (int t = 0; t < trials; ++t) {
+        Quat q = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+        const Vec3 p(u(rng) * scale * 0.2, u(rng) * scale * 0.2, u(rng) * scale * 0.2);
+        place_tool_vertices(tool, q, p, verts.data());
+        place_tool_planes(tool, q, p, normals.data(), offsets.data());
+        ConvexView slow = tool_convex_view(tool, verts.data(), normals.data(), offsets.data(), nullptr);
+        ConvexView fast = tool_convex_view(tool, verts.data(), normals.data(), offsets.data(), &q);
+        // A triangle near the tool: around a random tool vertex.
+        const Vec3 c = verts[size_t(rng() % verts.size())];
+        const double s = scale * (0.05 + 0.5 * (u(rng) + 1.0));
+        const Vec3 a = c + s * Vec3(u(rng), u(rng), u(rng)), b = c + s * Vec3(u(rng), u(rng), u(rng)),
+                   d = c + s * Vec3(u(rng), u(rng), u(rng));
+        const SatResult rs = separate_convex_triangle(slow, a, b, d);
+        const SatResult rf = separate_convex_triangle(fast, a, b, d);
+        ASSERT_EQ(rs.separation > 0.0, rf.separation > 0.0) << "trial " << t;
+        if (rs.separation <= 0.0) {
+            ++overlapping;
+            // Overlap: the least overlap is on an axis both keep.
+            EXPECT_NEAR(rf.separation, rs.separation, 1e-12 * scale) << "trial " << t;
+        } else {
+            ++separated;
+            EXPECT_LE(rf.separation, rs.separation + 1e-12 * scale) << "trial " << t;
+        }
+    }
+    EXPECT_GT(overlapping, trials / 10);
+    EXPECT_GT(separated, trials / 10);
+}
+
+TEST(FastSat, AgreesWithTheFullTestOnABox) { compare_on(make_box(Vec3(1e-3, 2e-3, 0.5e-3)), 2e-3, 3000, 1); }
+
+TEST(FastSat, AgreesWithTheFullTestOnProbeTips) {
+    compare_on(make_probe_tip_collision(ProbeKind::Williams), 1e-3, 3000, 2);
+    compare_on(make_probe_tip_collision(ProbeKind::Nabers), 1e-3, 3000, 3);
+}
+
+}  // namespace
+}  // namespace sulcus
