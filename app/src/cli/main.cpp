@@ -1,5 +1,6 @@
 // sulcus-cli: the headless command line. Exit status: 0 done; 1 ran, but a requested check
 // failed; 2 bad input or usage; 3 internal error.
+#include "cli/commands.h"
 #include "sulcus/app/run_plots.h"
 #include "sulcus/engine/runner.h"
 #include "sulcus/engine/scene_file.h"
@@ -11,17 +12,26 @@
 #include <string>
 #include <vector>
 
+namespace sulcus::cli {
+
+int usage(const std::string& msg) {
+    std::fprintf(stderr, "sulcus-cli: %s\n", msg.c_str());
+    std::fprintf(stderr, "try 'sulcus-cli help'\n");
+    return kUsage;
+}
+
+}  // namespace sulcus::cli
+
 namespace {
 
-constexpr int kOk = 0;
-constexpr int kUsage = 2;
-constexpr int kInternal = 3;
+using namespace sulcus::cli;
 
 const char* kHelpMain =
     "usage: sulcus-cli COMMAND [ARGS]\n"
     "\n"
     "commands:\n"
     "  run SCENE.json [--out DIR] [--plot]   run a scene headless, one step per servo tick\n"
+    "  content SUBCOMMAND ...                cases from charts, teeth, probes, checks, import\n"
     "  help [COMMAND]                        show help for a command\n"
     "\n"
     "exit status: 0 done; 1 ran, but a requested check failed; 2 bad input or usage;\n"
@@ -40,12 +50,6 @@ const char* kHelpRun =
     "\n"
     "Prints one summary line. Bad input (files, formats, values) exits 2 with one line per\n"
     "fault naming the file and the place.\n";
-
-int usage(const std::string& msg) {
-    std::fprintf(stderr, "sulcus-cli: %s\n", msg.c_str());
-    std::fprintf(stderr, "try 'sulcus-cli help'\n");
-    return kUsage;
-}
 
 int cmd_run(const std::vector<std::string>& args) {
     std::string scene_path, out_dir;
@@ -99,6 +103,10 @@ int cmd_help(const std::vector<std::string>& args) {
         std::fputs(kHelpRun, stdout);
         return kOk;
     }
+    if (args[0] == "content") {
+        std::fputs(kHelpContent, stdout);
+        return kOk;
+    }
     return usage("help: unknown command '" + args[0] + "'");
 }
 
@@ -113,6 +121,7 @@ int main(int argc, char** argv) {
         const std::string cmd = argv[1];
         std::vector<std::string> args(argv + 2, argv + argc);
         if (cmd == "run") return cmd_run(args);
+        if (cmd == "content") return cmd_content(args);
         if (cmd == "help" || cmd == "--help" || cmd == "-h") return cmd_help(args);
         return usage("unknown command '" + cmd + "'");
     } catch (const std::exception& e) {

@@ -1,0 +1,20 @@
+// The subcommands of sulcus-cli and what they share: exit codes and the usage message.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace sulcus::cli {
+
+inline constexpr int kOk = 0;
+inline constexpr int kFailed = 1;  // ran, but a requested check failed
+inline constexpr int kUsage = 2;   // bad input or usage
+inline constexpr int kInternal = 3;
+
+// Prints "sulcus-cli: MSG" and a hint to stderr; returns kUsage.
+int usage(const std::string& msg);
+
+extern const char* const kHelpContent;
+int cmd_content(const std::vector<std::string>& args);
+
+}  // namespace sulcus::cli
