@@ -5,6 +5,7 @@
 
 #include "sulcus/content/case.h"
 #include "sulcus/content/chart.h"
+#include "sulcus/content/gltf_io.h"
 #include "sulcus/content/probes.h"
 #include "sulcus/engine/renderer.h"
 #include "sulcus/engine/scene_file.h"
@@ -12,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 
 namespace sulcus {
@@ -133,6 +135,67 @@ void expect_case_probes_to_floor(const PatientCase& pc, double tolerance) {
         passes.push_back({p.fdi, p.site, p.t_start, p.t_end, site->floor_point, site->axis});
     }
     expect_probe_stops_at_floor(*mb.model, samples, passes, 1000.0, tolerance);
+}
+
+// Charts with recession, enlargement and furcations of every grade on premolar, molar and canine:
+// every mesh of the case (teeth, gingiva, bone) is a valid solid.
+TEST(Case, ChartsWithRecessionEnlargementAndFurcationsGiveValidMeshes) {
+    Chart c = uniform_chart({14, 16, 33}, 4.0, -2.0);
+    for (Site s : kAllSites) c.teeth[16].sites[size_t(s)] = SiteRecord{5.0, 2.0, true, false, false, false};
+    for (Site s : kAllSites) c.teeth[33].sites[size_t(s)] = SiteRecord{2.0, 1.5, false, false, false, false};
+    c.teeth[14].furcation = {{FurcationSide::M, 2}, {FurcationSide::D, 3}};
+    c.teeth[16].furcation = {{FurcationSide::B, 3}, {FurcationSide::M, 1}, {FurcationSide::D, 2}};
+    CaseSettings s = quick_settings();
+    s.bone = true;
+    const PatientCase pc = build_case(c, s);
+    EXPECT_EQ(pc.teeth.size(), 3u);
+    EXPECT_EQ(pc.sites.size(), 18u);
+    int gums = 0, bones = 0;
+    for (const auto& [name, mesh] : pc.solids) {
+        EXPECT_EQ(validate_mesh(mesh), "") << name;
+        gums += name.rfind("gingiva", 0) == 0;
+        bones += name.rfind("bone", 0) == 0;
+    }
+    EXPECT_EQ(gums, 2);  // both jaws
+    EXPECT_EQ(bones, 2);
+}
+
+TEST(CaseFiles, ExportImportGivesTheSameMeshesAndMetadata) {
+    Chart c = uniform_chart({45}, 3.0, -0.5);
+    const PatientCase pc = build_case(c, quick_settings());
+    const std::string dir = (std::filesystem::temp_directory_path() / "sulcus_case_roundtrip").string();
+    std::filesystem::remove_all(dir);
+    ASSERT_EQ(write_case(pc, ProbeKind::Williams, dir), "");
+    const AssetLoad back = read_glb(dir + "/case.glb");
+    ASSERT_TRUE(back.ok()) << back.error;
+    EXPECT_EQ(back.asset.extras, pc.asset.extras);  // format, chart, site frames
+    for (const AssetNode& n : pc.asset.nodes) {
+        const auto it = std::find_if(back.asset.nodes.begin(), back.asset.nodes.end(),
+                                     [&](const AssetNode& b) { return b.name == n.name; });
+        ASSERT_NE(it, back.asset.nodes.end()) << n.name;
+        EXPECT_EQ(it->extras, n.extras) << n.name;
+        ASSERT_EQ(it->parts.size(), n.parts.size()) << n.name;
+        for (size_t k = 0; k < n.parts.size(); ++k) {
+            const TriMesh& a = n.parts[k].mesh;
+            const TriMesh& b = it->parts[k].mesh;
+            EXPECT_EQ(b.triangles, a.triangles) << n.name;
+            ASSERT_EQ(b.vertices.size(), a.vertices.size()) << n.name;
+            for (size_t v = 0; v < a.vertices.size(); ++v)
+                for (int d = 0; d < 3; ++d) ASSERT_EQ(b.vertices[v][d], double(float(a.vertices[v][d]))) << n.name;
+            EXPECT_EQ(back.asset.materials[size_t(it->parts[k].material)], pc.asset.materials[size_t(n.parts[k].material)]);
+        }
+    }
+    // The scene the files make loads, and its solids are the case's (to float precision).
+    const SceneLoad scene = load_scene(dir + "/scene.json");
+    ASSERT_TRUE(scene.ok()) << scene.errors.front();
+    EXPECT_EQ(scene.scene.objects.size(), 2u);  // tooth and gingiva; bone is display-only
+    for (const SceneObject& o : scene.scene.objects) {
+        const auto it = std::find_if(pc.solids.begin(), pc.solids.end(), [&](const auto& s) { return s.first == o.name; });
+        ASSERT_NE(it, pc.solids.end()) << o.name;
+        EXPECT_EQ(o.mesh.triangles.size(), it->second.triangles.size()) << o.name;
+        EXPECT_NEAR(mesh_volume(o.mesh), mesh_volume(it->second), 1e-6 * mesh_volume(it->second)) << o.name;
+    }
+    std::filesystem::remove_all(dir);
 }
 
 TEST(CaseProbing, HealthyCentralIncisorStopsAtTheFloor) {

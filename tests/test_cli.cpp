@@ -1,5 +1,6 @@
-// sulcus-cli run end to end: outputs with the documented keys and columns, deterministic
+// sulcus-cli end to end. run: outputs with the documented keys and columns, deterministic
 // steps.csv, and bad input exiting 2 with one line naming the file and the fault.
+#include "sulcus/content/gltf_io.h"
 #include "sulcus/content/primitives.h"
 #include "sulcus/engine/mesh.h"
 
@@ -213,4 +214,80 @@ TEST_F(Cli, UsageErrors) {
     EXPECT_EQ(run_cli("run", dir).status, 2);
     EXPECT_EQ(run_cli("run a.json --bogus", dir).status, 2);
     EXPECT_EQ(run_cli("help run", dir).status, 0);
+}
+
+// sulcus-cli content: teeth and probes as glTF, checks of charts, scenes and meshes, import.
+TEST_F(Cli, ContentToothAndProbeWriteGltf) {
+    const Outcome t = run_cli("content tooth 36 --out " + (dir / "t36.glb").string(), dir);
+    ASSERT_EQ(t.status, 0) << t.err;
+    const AssetLoad a = read_glb((dir / "t36.glb").string());
+    ASSERT_TRUE(a.ok()) << a.error;
+    ASSERT_EQ(a.asset.nodes.size(), 1u);
+    EXPECT_EQ(a.asset.nodes[0].name, "tooth 36");
+    EXPECT_EQ(a.asset.nodes[0].extras.value("fdi", 0), 36);
+    EXPECT_EQ(a.asset.nodes[0].extras.value("universal", 0), 19);
+    // The tooth's parts together are a closed solid the engine reads.
+    const MeshLoad m = load_mesh((dir / "t36.glb").string());
+    EXPECT_TRUE(m.ok()) << m.error;
+    const size_t tris = m.mesh.triangles.size();
+    EXPECT_GE(tris, 5000u);
+    EXPECT_LE(tris, 20000u);
+
+    const Outcome p = run_cli("content probe unc15 --out " + (dir / "p.glb").string(), dir);
+    ASSERT_EQ(p.status, 0) << p.err;
+    const AssetLoad b = read_glb((dir / "p.glb").string());
+    ASSERT_TRUE(b.ok()) << b.error;
+    EXPECT_EQ(b.asset.nodes.size(), 2u);  // body with markings, collision tip
+
+    const Outcome bad = run_cli("content tooth 18 --out " + (dir / "t.glb").string(), dir);
+    EXPECT_EQ(bad.status, 2);
+    EXPECT_NE(bad.err.find("'18'"), std::string::npos) << bad.err;
+    EXPECT_EQ(run_cli("content probe spoon --out x.glb", dir).status, 2);
+    EXPECT_EQ(run_cli("content tooth 36", dir).status, 2);
+    EXPECT_EQ(run_cli("help content", dir).status, 0);
+}
+
+TEST_F(Cli, ContentCheckReportsFaultsWithTheirPlace) {
+    write_text(dir / "good.json", R"({"format": "sulcus.chart/1", "teeth": {"11": {"sites": {"B": {"pd_mm": 2}}}}})");
+    const Outcome ok = run_cli("content check " + (dir / "good.json").string(), dir);
+    EXPECT_EQ(ok.status, 0) << ok.err;
+    EXPECT_NE(ok.out.find("chart ok"), std::string::npos);
+
+    write_text(dir / "bad.json", R"({"format": "sulcus.chart/1", "teeth": {"11": {"sites": {"B": {"pd_mm": 99}}}}})");
+    const Outcome bad = run_cli("content check " + (dir / "bad.json").string(), dir);
+    EXPECT_EQ(bad.status, 1);
+    EXPECT_EQ(count_lines(bad.err), 1) << bad.err;
+    EXPECT_NE(bad.err.find("bad.json: /teeth/11/sites/B/pd_mm"), std::string::npos) << bad.err;
+
+    const Outcome scene = run_cli("content check " + (dir / "scene.json").string(), dir);
+    EXPECT_EQ(scene.status, 0) << scene.err;
+    const Outcome mesh = run_cli("content check " + (dir / "cube.obj").string(), dir);
+    EXPECT_EQ(mesh.status, 0) << mesh.err;
+    EXPECT_NE(mesh.out.find("12 triangles"), std::string::npos) << mesh.out;
+
+    write_text(dir / "open.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    const Outcome open = run_cli("content check " + (dir / "open.obj").string(), dir);
+    EXPECT_EQ(open.status, 1);
+    EXPECT_NE(open.err.find("open.obj"), std::string::npos) << open.err;
+}
+
+TEST_F(Cli, ContentCaseRejectsChartsItCannotBuild) {
+    write_text(dir / "partial.json", R"({"format": "sulcus.chart/1", "teeth": {"11": {"sites": {"B": {"pd_mm": 2}}}}})");
+    const Outcome o = run_cli("content case " + (dir / "partial.json").string() + " --out " + (dir / "c").string(), dir);
+    EXPECT_EQ(o.status, 2);
+    EXPECT_EQ(count_lines(o.err), 5) << o.err;  // five sites missing, one line each
+    EXPECT_NE(o.err.find("partial.json: /teeth/11/sites/MB: missing"), std::string::npos) << o.err;
+    EXPECT_FALSE(fs::exists(dir / "c"));
+}
+
+TEST_F(Cli, ContentImportScalesToMetres) {
+    std::string err;
+    ASSERT_TRUE(write_obj(make_box(Vec3(5.0)), (dir / "mm.obj").string(), &err)) << err;  // a 10 mm cube in mm
+    const Outcome o = run_cli("content import " + (dir / "mm.obj").string() + " --unit mm --out " +
+                                  (dir / "m.glb").string(), dir);
+    ASSERT_EQ(o.status, 0) << o.err;
+    const MeshLoad m = load_mesh((dir / "m.glb").string());
+    ASSERT_TRUE(m.ok()) << m.error;
+    EXPECT_NEAR(mesh_volume(m.mesh), 1e-6, 1e-12);
+    EXPECT_EQ(run_cli("content import " + (dir / "mm.obj").string() + " --unit furlong --out x.glb", dir).status, 2);
 }
