@@ -38,7 +38,8 @@ constexpr double kTopRounding = 0.35e-3;      // rounding of the outer edge of t
 constexpr double kMarginRounding = 0.08e-3;   // rounding of the margin's inner edge
 constexpr double kFloorRounding = 0.12e-3;    // fillet where the pocket floor meets the inner wall
 constexpr double kUnionRounding = 0.5e-3;     // papillae: seam between neighbouring collars
-constexpr double kGumBottom = -9e-3;          // bottom of the gingiva block (tooth frame y)
+constexpr double kBelowApex = 1.5e-3;         // the gingiva block ends this far below the longest root
+constexpr double kThickeningDepth = 5e-3;     // the outer surface leans out down to this depth
 constexpr double kHullInset = 0.05e-3;        // the pocket starts this far inside the tooth outline
 constexpr double kCrestBelowFloor = 1.5e-3;   // alveolar crest below the pocket floor
 constexpr double kBoneInset = 0.8e-3;         // bone surface inside the gingiva's outer surface
@@ -196,7 +197,7 @@ Local local_of(const ToothTables& t, const Vec3& p) {
 
 double collar(const ToothTables& t, const Local& l, const Vec3& p, double inset) {
     const double ym = t.margin.at(l.theta);
-    const double rout = t.outer.at(l.theta) - inset + kThickening * std::max(0.0, ym - l.p.y);
+    const double rout = t.outer.at(l.theta) - inset + kThickening * std::clamp(ym - l.p.y, 0.0, kThickeningDepth);
     double f = smooth_max(l.r - rout, l.p.y - ym, kTopRounding);
     f = std::max(f, t.bottom + inset - l.p.y);
     for (const auto& [point, normal] : t.cuts) f = std::max(f, glm::dot(p - point, normal));
@@ -493,6 +494,11 @@ PatientCase build_case(const Chart& chart, const CaseSettings& cs) {
         ToothTables& t = b.tables;
         const ToothShape& shape = *b.shape;
         const ToothRecord& rec = chart.teeth.at(t.placement.fdi);
+        // One flat bottom per jaw, below the longest root of the jaw's charted teeth.
+        t.bottom = 0.0;
+        for (const auto& [other, r2] : chart.teeth)
+            if ((other / 10 <= 2) == (t.placement.fdi / 10 <= 2))
+                t.bottom = std::min(t.bottom, -tooth_dimensions(other).root_length_mm * 1e-3 - kBelowApex);
         const std::vector<Vec3> neighbours = others_in(k);
         // The pocket's inner side is the tooth's convex outline (concavities stay filled with
         // tissue), so the probe's line must clear that outline, not only the surface.
@@ -588,12 +594,11 @@ PatientCase build_case(const Chart& chart, const CaseSettings& cs) {
                 for (int d = -w; d <= w; ++d) sum += mx[size_t((i + d + cd::kAngles) % cd::kAngles)];
                 const double taper = t.taper_at(t.margin.v[size_t(i)] - t.floor.v[size_t(i)]);
                 t.outer.v[size_t(i)] = std::max(sum / double(2 * w + 1), t.slot.v[size_t(i)]) + taper + kMarginThickness;
-                const double depth = t.margin.v[size_t(i)] - kGumBottom;
+                const double depth = std::min(t.margin.v[size_t(i)] - t.bottom, kThickeningDepth);
                 reach = std::max(reach, t.outer.v[size_t(i)] + kThickening * depth);
             }
             t.reach = reach + 2e-3;
         }
-        t.bottom = kGumBottom;
 
         // Furcations opened by the chart.
         for (const ToothShape::Furcation& f : shape.furcations()) {
@@ -664,7 +669,7 @@ PatientCase build_case(const Chart& chart, const CaseSettings& cs) {
             double ytop = -1.0;
             for (double v : b.tables.margin.v) ytop = std::max(ytop, v);
             for (int c = 0; c < 8; ++c) {
-                const Vec3 corner((c & 1) ? rr : -rr, (c & 2) ? ytop + 1e-3 : kGumBottom - 1e-3, (c & 4) ? rr : -rr);
+                const Vec3 corner((c & 1) ? rr : -rr, (c & 2) ? ytop + 1e-3 : b.tables.bottom - 1e-3, (c & 4) ? rr : -rr);
                 const Vec3 q = b.tables.placement.to_case(corner);
                 box.lo = glm::min(box.lo, q);
                 box.hi = glm::max(box.hi, q);
