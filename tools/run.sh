@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Builds Sulcus and runs it. With a display and the desktop app built, starts the app with the
 # given arguments; otherwise runs every paper scene headless (content/assets/scenes/paper/*.json)
-# into out/paper/<scene>/ with plots, printing each run's summary line. Exits non-zero when any
-# run does.
+# into out/paper/<scene>/ and the bundled healthy_11 case into out/cases/healthy_11/, with plots,
+# printing each run's summary line. Exits non-zero when any run does.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
@@ -35,4 +35,11 @@ for scene in "${scenes[@]}"; do
     if [ "$status" -gt "$worst" ]; then worst=$status; fi
   fi
 done
+# The bundled healthy case: the probe inserted at all six sites of tooth 11.
+status=0
+build/bin/sulcus-cli run build/cases/healthy_11/scene.json --out out/cases/healthy_11 --plot || status=$?
+if [ "$status" -ne 0 ]; then
+  echo "run: build/cases/healthy_11/scene.json: sulcus-cli exited with status $status" >&2
+  if [ "$status" -gt "$worst" ]; then worst=$status; fi
+fi
 exit "$worst"
