@@ -30,7 +30,7 @@ struct CcdCase {
 
     CcdResult run(const Pose& base, const double x[6], double clearance) {
         Quat q = base.orientation;
-        Vec3 cap[2];
+        Vec3 cap[kToolCapsules + 1];
         const CcdScratch s{v.data(), n.data(), d.data(), &q, cap};
         return conservative_advancement(*model, base, x, clearance, near.data(), static_cast<int>(near.size()), 4096, s);
     }

@@ -60,3 +60,50 @@ TEST(FastSat, AgreesWithTheFullTestOnProbeTips) {
 
 }  // namespace
 }  // namespace sulcus
+
+namespace sulcus {
+namespace {
+
+// The capsule chain's lower bound never exceeds the exact distance (it only ever skips work).
+void capsule_bound_holds(const TriMesh& tool_mesh, double scale, unsigned seed) {
+    const ModelBuild mb = build_model(tool_mesh, {}, RendererSettings{});
+    ASSERT_TRUE(mb.model) << mb.error;
+    const ModelTool& tool = mb.model->tool;
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::vector<Vec3> verts(tool.mesh.vertices.size()), normals(tool.face_normals.size());
+    std::vector<double> offsets(tool.face_normals.size());
+    Vec3 caps[kToolCapsules + 1];
+    const auto* tris = reinterpret_cast<const uint32_t (*)[3]>(tool.mesh.triangles.data());
+    int useful = 0;
+    for (int t = 0; t < 3000; ++t) {
+        const Quat q = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+        const Vec3 p(u(rng) * scale, u(rng) * scale, u(rng) * scale);
+        place_tool_vertices(tool, q, p, verts.data());
+        place_tool_planes(tool, q, p, normals.data(), offsets.data());
+        place_tool_capsule(tool, q, p, caps);
+        const ConvexView with = tool_convex_view(tool, verts.data(), normals.data(), offsets.data(), &q, caps);
+        const ConvexView without = tool_convex_view(tool, verts.data(), normals.data(), offsets.data(), &q);
+        const Vec3 c = verts[size_t(rng() % verts.size())] + 0.2 * scale * Vec3(u(rng), u(rng), u(rng));
+        const double s = 0.3 * scale;
+        const Vec3 a = c + s * Vec3(u(rng), u(rng), u(rng)), b = c + s * Vec3(u(rng), u(rng), u(rng)),
+                   d = c + s * Vec3(u(rng), u(rng), u(rng));
+        const double exact = distance_convex_triangle(without, tris, int(tool.mesh.triangles.size()), a, b, d);
+        const double lower = capsule_lower_bound(with, a, b, d);
+        EXPECT_LE(lower, exact + 1e-12 * scale) << "trial " << t;
+        useful += lower > 0.5 * exact && exact > 0.0;
+        // With the bound in place the distance is still exact when it matters (below the cutoff).
+        EXPECT_NEAR(distance_convex_triangle(with, tris, int(tool.mesh.triangles.size()), a, b, d, 1e300), exact,
+                    1e-12 * scale);
+    }
+    EXPECT_GT(useful, 100);  // the bound is not vacuous
+}
+
+TEST(CapsuleBound, NeverExceedsTheExactDistance) {
+    capsule_bound_holds(make_box(Vec3(1e-3, 2e-3, 0.5e-3)), 2e-3, 5);
+    capsule_bound_holds(make_probe_tip_collision(ProbeKind::Williams), 1e-3, 6);
+    capsule_bound_holds(make_probe_tip_collision(ProbeKind::Nabers), 1e-3, 7);
+}
+
+}  // namespace
+}  // namespace sulcus

@@ -30,11 +30,15 @@ CcdResult conservative_advancement(const Model& model, const Pose& base, const d
         *scratch.rotation = q;
         place_tool_capsule(tool, q, p, scratch.capsule);
         double d = 1e300;
+        // A distance this large lets the rest of the motion go through in one advance, so any
+        // lower bound that reaches it is as good as the exact distance.
+        const double enough = clearance + speed * (1.0 - tau);
         for (int i = 0; i < near_count; ++i) {
             const ModelObject& obj = model.objects[near[i].object];
             const auto& t = obj.mesh.triangles[near[i].tri];
             d = std::min(d, distance_convex_triangle(view, tris, tri_count, obj.mesh.vertices[t[0]],
-                                                     obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]], d));
+                                                     obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]],
+                                                     std::min(d, enough)));
             if (d <= clearance) {
                 r.hit = true;
                 r.toi = tau;

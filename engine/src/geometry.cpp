@@ -216,8 +216,12 @@ double segment_triangle_distance(const Vec3& p0, const Vec3& p1, const Vec3& a, 
 }
 
 double capsule_lower_bound(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c) {
-    if (!poly.capsule) return -1e300;
-    return segment_triangle_distance(poly.capsule[0], poly.capsule[1], a, b, c) - poly.capsule_radius;
+    if (!poly.capsule || poly.capsule_count <= 0) return -1e300;
+    double lower = 1e300;
+    for (int k = 0; k < poly.capsule_count; ++k)
+        lower = std::min(lower, segment_triangle_distance(poly.capsule[k], poly.capsule[k + 1], a, b, c) -
+                                    poly.capsule_radii[k]);
+    return lower;
 }
 
 double distance_convex_triangle(const ConvexView& poly, const uint32_t (*triangles)[3], int triangle_count,

@@ -42,17 +42,19 @@ struct ConvexView {
     const double* depths = nullptr;
     const Vec3 (*edge_normals)[2] = nullptr;
     const Quat* rotation = nullptr;
-    // Optional bounding capsule (world segment capsule[0]-capsule[1], radius): every point of the
-    // polytope lies within capsule_radius of the segment. Gives cheap lower bounds on distance.
+    // Optional bounding capsules: capsule k is the segment capsule[k]-capsule[k + 1] with radius
+    // capsule_radii[k]; every point of the polytope lies in one of them. Gives cheap lower bounds
+    // on distance.
     const Vec3* capsule = nullptr;
-    double capsule_radius = 0.0;
+    const double* capsule_radii = nullptr;
+    int capsule_count = 0;
 };
 
 // Distance between segment p0-p1 and triangle (a, b, c); 0 when the segment crosses it.
 double segment_triangle_distance(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& b, const Vec3& c);
 
-// A lower bound on the distance between the polytope and the triangle from its bounding capsule
-// (-infinity without one); <= 0 says nothing.
+// A lower bound on the distance between the polytope and the triangle from its bounding capsules
+// (-infinity without them); <= 0 says nothing.
 double capsule_lower_bound(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c);
 
 // Largest separation of the convex polytope and triangle (a, b, c) over the separating-axis

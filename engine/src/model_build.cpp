@@ -38,14 +38,39 @@ void set_bounding_capsule(ModelTool& tool) {
         lo = std::min(lo, glm::dot(v - c, axis));
         hi = std::max(hi, glm::dot(v - c, axis));
     }
-    tool.capsule = {c + lo * axis, c + hi * axis};
-    double r = 0.0;
+    constexpr int K = kToolCapsules;
+    for (int k = 0; k <= K; ++k) tool.capsule_points[size_t(k)] = c + (lo + (hi - lo) * k / K) * axis;
+    // The tool between two cut planes is the hull of its vertices there and of its edges' crossings
+    // of the planes; the largest distance to the axis is at one of those points.
+    auto radial = [&](const Vec3& x) { return glm::length((x - c) - glm::dot(x - c, axis) * axis); };
+    auto slab_of = [&](double s) { return std::clamp(int(std::floor((s - lo) / (hi - lo) * K)), 0, K - 1); };
+    std::array<double, K> r{};
     for (const Vec3& v : vs) {
-        const double t = std::clamp(glm::dot(v - c, axis), lo, hi);
-        r = std::max(r, glm::length(v - (c + t * axis)));
+        const double s = glm::dot(v - c, axis);
+        r[size_t(slab_of(s))] = std::max(r[size_t(slab_of(s))], radial(v));
+        // A vertex on a cut belongs to both slabs.
+        const double u = (s - lo) / (hi - lo) * K;
+        const int near = int(std::lround(u));
+        if (std::abs(u - near) < 1e-9 && near > 0 && near < K) {
+            r[size_t(near - 1)] = std::max(r[size_t(near - 1)], radial(v));
+            r[size_t(near)] = std::max(r[size_t(near)], radial(v));
+        }
     }
-    // A hair over, so rounding never puts a vertex outside.
-    tool.capsule_radius_m = r * (1.0 + 1e-9) + 1e-12;
+    for (const auto& tri : tool.mesh.triangles)
+        for (int e = 0; e < 3; ++e) {
+            const Vec3& a = vs[tri[size_t(e)]];
+            const Vec3& b = vs[tri[size_t((e + 1) % 3)]];
+            const double sa = glm::dot(a - c, axis), sb = glm::dot(b - c, axis);
+            for (int k = 1; k < K; ++k) {
+                const double cut = lo + (hi - lo) * k / K;
+                if ((sa - cut) * (sb - cut) >= 0.0) continue;
+                const double rr = radial(a + (b - a) * ((cut - sa) / (sb - sa)));
+                r[size_t(k - 1)] = std::max(r[size_t(k - 1)], rr);
+                r[size_t(k)] = std::max(r[size_t(k)], rr);
+            }
+        }
+    // A hair over, so rounding never puts a point outside.
+    for (int k = 0; k < K; ++k) tool.capsule_radii_m[size_t(k)] = r[size_t(k)] * (1.0 + 1e-9) + 1e-12;
 }
 
 std::string build_tool(const TriMesh& mesh, ModelTool& tool) {

@@ -130,7 +130,7 @@ struct Workspace {
     Vec3 face_n[kMaxToolFaces];
     double face_d[kMaxToolFaces];
     Quat face_q{1.0, 0.0, 0.0, 0.0};  // the rotation face_n was placed with
-    Vec3 capsule[2];                   // the tool's bounding capsule at that pose
+    Vec3 capsule[kToolCapsules + 1];   // the tool's bounding capsules at that pose
     NearTri near[kMaxNear];
     int near_count = 0;
     FeatureKey feats[kMaxFeatures];

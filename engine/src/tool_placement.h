@@ -21,9 +21,9 @@ inline void place_tool_planes(const ModelTool& tool, const Quat& q, const Vec3& 
 
 // `rotation` (the tool's world orientation, kept current by the caller as the planes move)
 // enables the fast separating-axis test.
-inline void place_tool_capsule(const ModelTool& tool, const Quat& q, const Vec3& p, Vec3* ends) {
-    ends[0] = q * tool.capsule[0] + p;
-    ends[1] = q * tool.capsule[1] + p;
+// The capsules' axis points (kToolCapsules + 1 of them) in the world.
+inline void place_tool_capsule(const ModelTool& tool, const Quat& q, const Vec3& p, Vec3* points) {
+    for (size_t k = 0; k < tool.capsule_points.size(); ++k) points[k] = q * tool.capsule_points[k] + p;
 }
 
 inline ConvexView tool_convex_view(const ModelTool& tool, const Vec3* vertices, const Vec3* normals,
@@ -40,7 +40,8 @@ inline ConvexView tool_convex_view(const ModelTool& tool, const Vec3* vertices, 
     v.edge_normals = reinterpret_cast<const Vec3 (*)[2]>(tool.edge_normals.data());
     v.rotation = rotation;
     v.capsule = capsule;
-    v.capsule_radius = tool.capsule_radius_m;
+    v.capsule_radii = tool.capsule_radii_m.data();
+    v.capsule_count = kToolCapsules;
     return v;
 }
 

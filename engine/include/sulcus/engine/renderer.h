@@ -70,6 +70,8 @@ struct ModelObject {
     Bvh bvh;                   // over the world-placed mesh
 };
 
+inline constexpr int kToolCapsules = 4;
+
 // The tool: a closed convex triangle mesh in its own frame, with its features.
 struct ModelTool {
     TriMesh mesh;
@@ -85,9 +87,11 @@ struct ModelTool {
     std::vector<std::array<uint32_t, 2>> edges;
     std::vector<std::array<Vec3, 2>> edge_normals;
     double radius_m = 0.0;  // largest distance from the local origin to a vertex
-    // Bounding capsule along the principal axis (local segment, radius): cheap distance bounds.
-    std::array<Vec3, 2> capsule{Vec3(0.0), Vec3(0.0)};
-    double capsule_radius_m = 0.0;
+    // Bounding capsules along the principal axis: the axis cut into kToolCapsules equal pieces
+    // (capsule k runs from capsule_points[k] to [k + 1], local frame), each with the radius of the
+    // slab of tool it covers. Cheap, tight lower bounds on distance for long tools such as probes.
+    std::array<Vec3, kToolCapsules + 1> capsule_points{};
+    std::array<double, kToolCapsules> capsule_radii_m{};
 };
 
 struct Model {
