@@ -100,9 +100,17 @@ void capsule_bound_holds(const TriMesh& tool_mesh, double scale, unsigned seed) 
 }
 
 TEST(CapsuleBound, NeverExceedsTheExactDistance) {
-    capsule_bound_holds(make_box(Vec3(1e-3, 2e-3, 0.5e-3)), 2e-3, 5);
     capsule_bound_holds(make_probe_tip_collision(ProbeKind::Williams), 1e-3, 6);
     capsule_bound_holds(make_probe_tip_collision(ProbeKind::Nabers), 1e-3, 7);
+}
+
+TEST(CapsuleBound, OnlyLongToolsUseCapsules) {
+    const ModelBuild box = build_model(make_box(Vec3(1e-3, 2e-3, 0.5e-3)), {}, RendererSettings{});
+    ASSERT_TRUE(box.model);
+    EXPECT_EQ(box.model->tool.capsule_count, 0);
+    const ModelBuild probe = build_model(make_probe_tip_collision(ProbeKind::Williams), {}, RendererSettings{});
+    ASSERT_TRUE(probe.model);
+    EXPECT_EQ(probe.model->tool.capsule_count, kToolCapsules);
 }
 
 }  // namespace

@@ -71,6 +71,8 @@ void set_bounding_capsule(ModelTool& tool) {
         }
     // A hair over, so rounding never puts a point outside.
     for (int k = 0; k < K; ++k) tool.capsule_radii_m[size_t(k)] = r[size_t(k)] * (1.0 + 1e-9) + 1e-12;
+    const double widest = *std::max_element(tool.capsule_radii_m.begin(), tool.capsule_radii_m.end());
+    tool.capsule_count = (hi - lo) > 4.0 * widest ? K : 0;
 }
 
 std::string build_tool(const TriMesh& mesh, ModelTool& tool) {

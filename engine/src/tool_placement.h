@@ -41,7 +41,7 @@ inline ConvexView tool_convex_view(const ModelTool& tool, const Vec3* vertices, 
     v.rotation = rotation;
     v.capsule = capsule;
     v.capsule_radii = tool.capsule_radii_m.data();
-    v.capsule_count = kToolCapsules;
+    v.capsule_count = tool.capsule_count;
     return v;
 }
 

@@ -92,6 +92,9 @@ struct ModelTool {
     // slab of tool it covers. Cheap, tight lower bounds on distance for long tools such as probes.
     std::array<Vec3, kToolCapsules + 1> capsule_points{};
     std::array<double, kToolCapsules> capsule_radii_m{};
+    // kToolCapsules for a long tool (axis over four times its widest capsule), else 0: for a
+    // compact tool the bounds are loose and cost more than they save.
+    int capsule_count = 0;
 };
 
 struct Model {
