@@ -11,22 +11,11 @@ namespace sulcus {
 using json = nlohmann::json;
 using textio::num;
 using textio::one_line;
+using textio::Reporter;
 using textio::pointer_token;
 using textio::shown;
 
 namespace {
-
-struct Reporter {
-    std::string source;
-    std::vector<std::string>* errors;
-    std::vector<std::string>* warnings;
-    void error(const std::string& place, const std::string& what) const {
-        errors->push_back(one_line(source + ": " + place + ": " + what));
-    }
-    void warning(const std::string& place, const std::string& what) const {
-        warnings->push_back(one_line(source + ": " + place + ": " + what));
-    }
-};
 
 bool valid_permanent_fdi(int fdi) { return fdi / 10 >= 1 && fdi / 10 <= 4 && fdi % 10 >= 1 && fdi % 10 <= 8; }
 

@@ -38,18 +38,7 @@ using textio::one_line;
 using textio::pointer_token;
 using textio::shown;
 
-struct Reporter {
-    std::string file;
-    std::vector<std::string>* errors;
-    std::vector<std::string>* warnings;
-
-    void error(const std::string& place, const std::string& what) const {
-        errors->push_back(one_line(file + ": " + place + ": " + what));
-    }
-    void warning(const std::string& place, const std::string& what) const {
-        warnings->push_back(one_line(file + ": " + place + ": " + what));
-    }
-};
+using textio::Reporter;
 
 // Mesh and trajectory paths are relative to the scene file's folder.
 std::string resolve(const std::string& scene_path, const std::string& relative) {

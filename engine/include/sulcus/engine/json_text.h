@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include <string>
+#include <vector>
 
 namespace sulcus::textio {
 
@@ -17,6 +18,19 @@ std::string shown(const std::string& s);
 std::string num(double v);
 // One reference token of a JSON pointer (RFC 6901: '~' -> "~0", '/' -> "~1").
 std::string pointer_token(const std::string& key);
+// Collects "file: place: what" lines (place a JSON pointer) into a reader's errors and warnings.
+struct Reporter {
+    std::string file;
+    std::vector<std::string>* errors;
+    std::vector<std::string>* warnings;
+    void error(const std::string& place, const std::string& what) const {
+        errors->push_back(one_line(file + ": " + place + ": " + what));
+    }
+    void warning(const std::string& place, const std::string& what) const {
+        warnings->push_back(one_line(file + ": " + place + ": " + what));
+    }
+};
+
 // Reads a whole file; on failure returns false with a one-line reason ("file not found", ...).
 bool read_file(const std::string& path, std::string& text, std::string& why);
 // Parses `text` (read from `path`) as strict JSON without comments; on failure returns false
