@@ -141,15 +141,6 @@ double ToothTables::hull_at(double theta, double y) const {
     return a * (1.0 - g) + b * g;
 }
 
-double ToothTables::taper_at(double height) const {
-    if (taper.empty() || height <= 0.0) return 0.0;
-    const double u = height / taper_step;
-    const size_t i = size_t(u);
-    if (i + 1 >= taper.size()) return taper.back();
-    const double f = u - double(i);
-    return taper[i] * (1.0 - f) + taper[i + 1] * f;
-}
-
 double Tunnel::field(const Vec3& p) const {
     const Vec3 q = p - entrance;
     const double d = q.x * inward.x + q.z * inward.z;
@@ -207,7 +198,7 @@ double collar(const ToothTables& t, const Local& l, const Vec3& p, double inset)
 // Negative inside the pocket of this tooth.
 double pocket(const ToothTables& t, const Local& l) {
     const double yf = t.floor.at(l.theta);
-    const double wall = l.r - t.slot.at(l.theta) - t.taper_at(l.p.y - yf);
+    const double wall = l.r - t.slot.at(l.theta);
     const double floor = yf - l.p.y;
     const double inner = (t.hull_at(l.theta, l.p.y) - kHullInset) - l.r;
     return std::max(smooth_max(wall, floor, kFloorRounding), inner);
@@ -512,8 +503,6 @@ PatientCase build_case(const Chart& chart, const CaseSettings& cs) {
                 outline.emplace_back(rad * std::cos(th), t.hull_y0 + t.hull_dy * j, rad * std::sin(th));
             }
         const ProbeClearance probe_clear{&cs.probe_profile_m, cs.probe_profile_step_m, r, cs.tooth_clearance_m};
-        t.taper.clear();  // the wall stands straight, as wide as the probe is at the pocket's top
-        t.taper_step = cs.probe_profile_step_m;
 
         // Site angles: at the shape's site angles, turned toward the facial or lingual middle
         // where a neighbouring tooth is in the probe's way.
@@ -592,8 +581,7 @@ PatientCase build_case(const Chart& chart, const CaseSettings& cs) {
             for (int i = 0; i < cd::kAngles; ++i) {
                 double sum = 0.0;
                 for (int d = -w; d <= w; ++d) sum += mx[size_t((i + d + cd::kAngles) % cd::kAngles)];
-                const double taper = t.taper_at(t.margin.v[size_t(i)] - t.floor.v[size_t(i)]);
-                t.outer.v[size_t(i)] = std::max(sum / double(2 * w + 1), t.slot.v[size_t(i)]) + taper + kMarginThickness;
+                t.outer.v[size_t(i)] = std::max(sum / double(2 * w + 1), t.slot.v[size_t(i)]) + kMarginThickness;
                 const double depth = std::min(t.margin.v[size_t(i)] - t.bottom, kThickeningDepth);
                 reach = std::max(reach, t.outer.v[size_t(i)] + kThickening * depth);
             }

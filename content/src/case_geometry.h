@@ -42,10 +42,6 @@ struct ToothTables {
     std::vector<Tunnel> tunnels;
     // Half-spaces toward the neighbouring teeth of the same jaw: the collar stays on this side.
     std::vector<std::pair<Vec3, Vec3>> cuts;  // (point, outward unit normal) in the case frame
-    // Widening of the pocket wall with height above the floor (the probe's taper), sampled.
-    std::vector<double> taper;
-    double taper_step = 1e-4;
-    double taper_at(double height) const;
     double reach = 0.0;  // radius beyond which this tooth's collar and slot do not matter
     double bottom = 0.0; // y of the bottom of the gingiva block, tooth frame
 };

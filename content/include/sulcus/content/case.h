@@ -52,7 +52,8 @@ struct SiteFrame {
 struct CaseSettings {
     double probe_radius_m = 0.25e-3;     // radius of the probe tip the pocket is opened for
     // Radius of the probe's collision tip at heights 0, step, 2 step, ... above its end (a tapered
-    // working end); empty = probe_radius_m all along. The pocket wall leans out with it.
+    // working end); empty = probe_radius_m all along. The pocket wall clears its widest part
+    // within the pocket.
     std::vector<double> probe_profile_m;
     double probe_profile_step_m = 1e-4;
     double tooth_clearance_m = 0.05e-3;  // probe line to tooth (and neighbouring teeth)
