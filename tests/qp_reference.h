@@ -1,12 +1,13 @@
 // A slow, independent reference for qp::solve, for tests only.
 //
 // For a strictly convex QP the optimum is the unique KKT point, and it satisfies the KKT
-// conditions with some linearly independent subset of at most kVars active constraints. So:
-// enumerate every subset of at most kVars constraints (general rows and finite box bounds),
+// conditions with some linearly independent subset of at most n = vars active constraints. So:
+// enumerate every subset of at most n constraints (general rows and finite box bounds),
 // solve the equality-constrained QP on it with a dense rank-revealing factorisation, keep the
 // points that are primal feasible and have non-negative multipliers, and return the one of
 // least objective (near-ties to the most feasible). No subset qualifies -> infeasible. Cost
-// is exponential in the constraint count, so keep test problems at 14 constraints or fewer.
+// is exponential in the constraint count (and, up to it, in n), so keep test problems at 14
+// constraints or fewer.
 #pragma once
 
 #include "sulcus/engine/qp.h"
@@ -23,37 +24,42 @@ namespace sulcus::qp::reference {
 
 struct Result {
     bool feasible = false;
-    double x[kVars] = {};
+    double x[kMaxVars] = {};  // zero beyond vars
     double objective = 0;
     int subset_size = 0;     // size of the subset that produced x
     int subsets_tried = 0;   // subsets with linearly independent normals
 };
 
 struct Constraint {
-    double a[kVars];
-    double b;
+    int vars = 0;
+    double a[kMaxVars] = {};
+    double b = 0;
 };
 
 // All constraints as a.x >= b: rows first, then x_j >= lower_j, then -x_j >= -upper_j.
 inline std::vector<Constraint> constraints_of(const Problem& p) {
+    const int n = p.vars;
     std::vector<Constraint> out;
     for (int i = 0; i < p.rows; ++i) {
         Constraint c{};
-        for (int j = 0; j < kVars; ++j) c.a[j] = p.a[i][j];
+        c.vars = n;
+        for (int j = 0; j < n; ++j) c.a[j] = p.a[i][j];
         c.b = p.b[i];
         out.push_back(c);
     }
-    for (int j = 0; j < kVars; ++j) {
+    for (int j = 0; j < n; ++j) {
         if (std::isfinite(p.lower[j])) {
             Constraint c{};
+            c.vars = n;
             c.a[j] = 1;
             c.b = p.lower[j];
             out.push_back(c);
         }
     }
-    for (int j = 0; j < kVars; ++j) {
+    for (int j = 0; j < n; ++j) {
         if (std::isfinite(p.upper[j])) {
             Constraint c{};
+            c.vars = n;
             c.a[j] = -1;
             c.b = -p.upper[j];
             out.push_back(c);
@@ -65,7 +71,7 @@ inline std::vector<Constraint> constraints_of(const Problem& p) {
 // b - a.x relative to the size of its terms, the scale of its rounding error.
 inline double violation(const Constraint& c, const double* x) {
     double ax = 0, size = 1 + std::fabs(c.b);
-    for (int j = 0; j < kVars; ++j) {
+    for (int j = 0; j < c.vars; ++j) {
         ax += c.a[j] * x[j];
         size += std::fabs(c.a[j] * x[j]);
     }
@@ -73,13 +79,15 @@ inline double violation(const Constraint& c, const double* x) {
 }
 
 inline Result solve(const Problem& p, double tol = 1e-9) {
-    using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kVars, kVars>;
-    using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kVars, 1>;
+    using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxVars, kMaxVars>;
+    using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxVars, 1>;
+    const int n = p.vars;
+    assert(n >= 1 && n <= kMaxVars);
     Result best;
 
     const std::vector<Constraint> all = constraints_of(p);
     struct Candidate {
-        double x[kVars];
+        double x[kMaxVars];
         double objective;
         double violation;  // largest relative violation over all constraints
         int subset_size;
@@ -105,21 +113,21 @@ inline Result solve(const Problem& p, double tol = 1e-9) {
     // reveals the rank): mu = P R^-1 R^-T P^T c. Working on N rather than on the Gram matrix
     // N N^T keeps the conditioning unsquared for the rank decision.
     auto try_subset = [&](const int* idx, int k) {
-        Mat Nt(kVars, k);
+        Mat Nt(n, k);
         Vec c(k), scale(k);
         for (int r = 0; r < k; ++r) {
             const Constraint& con = all[usable[idx[r]]];
             double at = 0, n2 = 0;
-            for (int j = 0; j < kVars; ++j) {
+            for (int j = 0; j < n; ++j) {
                 at += con.a[j] * p.target[j];
                 n2 += con.a[j] * con.a[j] / p.weight[j];
             }
             scale[r] = 1.0 / std::sqrt(n2);
-            for (int j = 0; j < kVars; ++j) Nt(j, r) = con.a[j] / std::sqrt(p.weight[j]) * scale[r];
+            for (int j = 0; j < n; ++j) Nt(j, r) = con.a[j] / std::sqrt(p.weight[j]) * scale[r];
             c[r] = (con.b - at) * scale[r];
         }
         Vec mu(k);
-        Eigen::Matrix<double, kVars, 1> u = Eigen::Matrix<double, kVars, 1>::Zero();
+        Vec u = Vec::Zero(n);
         if (k > 0) {
             Eigen::ColPivHouseholderQR<Mat> qr(Nt);
             qr.setThreshold(1e-10);
@@ -128,7 +136,7 @@ inline Result solve(const Problem& p, double tol = 1e-9) {
             Vec y = qr.colsPermutation().transpose() * c;
             R.transpose().solveInPlace(y);
             // u = Q [y; 0] directly, rather than N^T mu, keeps its error at cond(N) eps.
-            Eigen::Matrix<double, kVars, 1> full = Eigen::Matrix<double, kVars, 1>::Zero();
+            Vec full = Vec::Zero(n);
             full.head(k) = y;
             u = qr.householderQ() * full;
             R.solveInPlace(y);
@@ -138,23 +146,22 @@ inline Result solve(const Problem& p, double tol = 1e-9) {
         ++best.subsets_tried;
         for (int r = 0; r < k; ++r)
             if (mu[r] < -tol) return;
-        double x[kVars];
-        for (int j = 0; j < kVars; ++j) x[j] = p.target[j] + u[j] / std::sqrt(p.weight[j]);
+        double x[kMaxVars] = {};
+        for (int j = 0; j < n; ++j) x[j] = p.target[j] + u[j] / std::sqrt(p.weight[j]);
         Candidate cand{};
         cand.violation = -std::numeric_limits<double>::infinity();
         for (const Constraint& c : all) cand.violation = std::max(cand.violation, violation(c, x));
         if (cand.violation > tol) return;
-        for (int j = 0; j < kVars; ++j) {
-            cand.x[j] = x[j];
+        for (int j = 0; j < kMaxVars; ++j) cand.x[j] = x[j];
+        for (int j = 0; j < n; ++j)
             cand.objective += 0.5 * p.weight[j] * (x[j] - p.target[j]) * (x[j] - p.target[j]);
-        }
         cand.subset_size = k;
         candidates.push_back(cand);
     };
 
-    // Subsets in lexicographic order, sizes 0..kVars.
-    int idx[kVars];
-    for (int k = 0; k <= kVars && k <= m; ++k) {
+    // Subsets in lexicographic order, sizes 0..n.
+    int idx[kMaxVars];
+    for (int k = 0; k <= n && k <= m; ++k) {
         for (int r = 0; r < k; ++r) idx[r] = r;
         for (;;) {
             try_subset(idx, k);
@@ -178,7 +185,7 @@ inline Result solve(const Problem& p, double tol = 1e-9) {
     best.feasible = true;
     best.objective = pick->objective;
     best.subset_size = pick->subset_size;
-    for (int j = 0; j < kVars; ++j) best.x[j] = pick->x[j];
+    for (int j = 0; j < kMaxVars; ++j) best.x[j] = pick->x[j];
     return best;
 }
 

@@ -70,9 +70,11 @@ private:
     std::mt19937_64 gen_;
 };
 
-std::unique_ptr<Problem> empty_problem() {
+// Every variable free, weight 1, target 0; n variables (the pose problem by default).
+std::unique_ptr<Problem> empty_problem(int n = kPoseVars) {
     auto p = std::make_unique<Problem>();
-    for (int j = 0; j < kVars; ++j) {
+    p->vars = n;
+    for (int j = 0; j < n; ++j) {
         p->weight[j] = 1;
         p->target[j] = 0;
         p->lower[j] = -kInf;
@@ -84,7 +86,7 @@ std::unique_ptr<Problem> empty_problem() {
 
 int finite_bounds(const Problem& p) {
     int n = 0;
-    for (int j = 0; j < kVars; ++j) n += std::isfinite(p.lower[j]) + std::isfinite(p.upper[j]);
+    for (int j = 0; j < p.vars; ++j) n += std::isfinite(p.lower[j]) + std::isfinite(p.upper[j]);
     return n;
 }
 
@@ -92,7 +94,7 @@ int finite_bounds(const Problem& p) {
 // ~1e-4), or near-uniform.
 void random_weights(Rng& rng, Problem& p) {
     const int mode = rng.integer(0, 2);
-    for (int j = 0; j < kVars; ++j) {
+    for (int j = 0; j < p.vars; ++j) {
         if (mode == 0) p.weight[j] = std::pow(10.0, rng.uniform(-6, 0));
         if (mode == 1) p.weight[j] = (j < 3 ? 1.0 : 1e-4) * rng.uniform(0.5, 2.0);
         if (mode == 2) p.weight[j] = rng.uniform(0.5, 2.0);
@@ -100,34 +102,34 @@ void random_weights(Rng& rng, Problem& p) {
 }
 
 void random_target(Rng& rng, Problem& p) {
-    for (int j = 0; j < kVars; ++j) p.target[j] = rng.uniform(-1, 1);
+    for (int j = 0; j < p.vars; ++j) p.target[j] = rng.uniform(-1, 1);
 }
 
-void random_normal(Rng& rng, double (&a)[kVars]) {
+void random_normal(Rng& rng, double* a, int n = kPoseVars) {
     const double mag = std::pow(10.0, rng.uniform(-1, 1));  // rows need not be unit
-    for (int j = 0; j < kVars; ++j) a[j] = mag * rng.normal();
-    if (rng.chance(0.2)) a[rng.integer(0, kVars - 1)] = 0;  // sparse rows occur too
+    for (int j = 0; j < n; ++j) a[j] = mag * rng.normal();
+    if (rng.chance(0.2)) a[rng.integer(0, n - 1)] = 0;  // sparse rows occur too
 }
 
-double dot(const double* a, const double* x) {
+double dot(const double* a, const double* x, int n = kPoseVars) {
     double s = 0;
-    for (int j = 0; j < kVars; ++j) s += a[j] * x[j];
+    for (int j = 0; j < n; ++j) s += a[j] * x[j];
     return s;
 }
 
 // A row through the neighbourhood of the target: mostly violated there, sometimes not.
 void add_random_row(Rng& rng, Problem& p) {
     const int i = p.rows++;
-    random_normal(rng, p.a[i]);
+    random_normal(rng, p.a[i], p.vars);
     double n = 0;
-    for (int j = 0; j < kVars; ++j) n += p.a[i][j] * p.a[i][j] / p.weight[j];
-    p.b[i] = dot(p.a[i], p.target) + std::sqrt(n) * rng.uniform(-0.3, 1.0);
+    for (int j = 0; j < p.vars; ++j) n += p.a[i][j] * p.a[i][j] / p.weight[j];
+    p.b[i] = dot(p.a[i], p.target, p.vars) + std::sqrt(n) * rng.uniform(-0.3, 1.0);
 }
 
 // Box sides, each finite at random, around a point near the target; at most max_sides new
 // ones. Sides already finite are kept, and a new side never crosses the opposite one.
 void random_box(Rng& rng, Problem& p, int max_sides) {
-    for (int j = 0; j < kVars; ++j) {
+    for (int j = 0; j < p.vars; ++j) {
         const double c = p.target[j] + rng.uniform(-1, 1) / std::sqrt(p.weight[j]);
         const double h = rng.uniform(0, 1) / std::sqrt(p.weight[j]);
         if (max_sides > 0 && rng.chance(0.3) && !std::isfinite(p.lower[j]) && c - h <= p.upper[j]) {
@@ -144,42 +146,21 @@ void random_box(Rng& rng, Problem& p, int max_sides) {
 struct Checked {
     Status status;
     int iterations;
+    int active_count;
 };
 
-// Solves, checks the KKT conditions of the answer on their own, and compares with the reference.
-Checked check_problem(const Problem& p, const char* what, int id) {
-    SCOPED_TRACE(testing::Message() << what << " #" << id);
-    const Settings settings;
-    Solution s;
-    solve(p, settings, nullptr, s);
-    const reference::Result ref = reference::solve(p);
-
-    EXPECT_NE(s.status, Status::IterationLimit);
-    EXPECT_NE(s.status, Status::InvalidInput);
-    EXPECT_EQ(s.status == Status::Optimal, ref.feasible) << "solver: " << to_string(s.status);
-    if (s.status != Status::Optimal) return {s.status, s.iterations};
-
-    double obj = 0;
-    for (int j = 0; j < kVars; ++j)
-        obj += 0.5 * p.weight[j] * (s.x[j] - p.target[j]) * (s.x[j] - p.target[j]);
-    EXPECT_NEAR(s.objective, obj, 1e-12 * (1 + obj));
-    if (ref.feasible) {
-        // Objective agrees with the reference.
-        EXPECT_NEAR(s.objective, ref.objective, 1e-9 * std::fabs(ref.objective) + 1e-13);
-        // The minimiser of a strictly convex QP is unique: x agrees, measured in the W-metric.
-        double dx2 = 0;
-        for (int j = 0; j < kVars; ++j)
-            dx2 += p.weight[j] * (s.x[j] - ref.x[j]) * (s.x[j] - ref.x[j]);
-        EXPECT_LE(std::sqrt(dx2), 1e-7 * (1 + std::sqrt(2 * ref.objective)));
-    }
-
+// The KKT conditions of an optimal answer, checked on their own: primal feasibility, dual
+// feasibility (multipliers >= 0), complementarity (active constraints hold with equality) and
+// stationarity W(x - t) = sum lambda_i a_i, all over the problem's n = vars variables.
+void expect_kkt(const Problem& p, const Solution& s) {
+    const int n = p.vars;
     // Primal feasibility, in the original units, recomputed here: relative to the size of the
     // terms of a.x - b (their rounding scale), and in absolute terms against max_violation.
     for (const reference::Constraint& c : reference::constraints_of(p))
         EXPECT_LE(reference::violation(c, s.x), 1e-9);
     double worst = -kInf;
-    for (int i = 0; i < p.rows; ++i) worst = std::max(worst, p.b[i] - dot(p.a[i], s.x));
-    for (int j = 0; j < kVars; ++j) {
+    for (int i = 0; i < p.rows; ++i) worst = std::max(worst, p.b[i] - dot(p.a[i], s.x, n));
+    for (int j = 0; j < n; ++j) {
         if (std::isfinite(p.lower[j])) worst = std::max(worst, p.lower[j] - s.x[j]);
         if (std::isfinite(p.upper[j])) worst = std::max(worst, s.x[j] - p.upper[j]);
     }
@@ -189,46 +170,81 @@ Checked check_problem(const Problem& p, const char* what, int id) {
 
     // Dual feasibility, complementarity and stationarity W(x - t) = sum lambda_i a_i.
     EXPECT_GE(s.active_count, 0);
-    EXPECT_LE(s.active_count, kVars);
-    double grad[kVars];
-    for (int j = 0; j < kVars; ++j) grad[j] = p.weight[j] * (s.x[j] - p.target[j]);
+    EXPECT_LE(s.active_count, n);
+    double grad[kMaxVars];
+    for (int j = 0; j < n; ++j) grad[j] = p.weight[j] * (s.x[j] - p.target[j]);
     double gnorm = 0;
-    for (double g : grad) gnorm = std::max(gnorm, std::fabs(g));
+    for (int j = 0; j < n; ++j) gnorm = std::max(gnorm, std::fabs(grad[j]));
     for (int k = 0; k < s.active_count; ++k) {
         EXPECT_GE(s.multipliers[k], 0.0);
         const int idx = s.active[k];
-        double a[kVars] = {}, b = 0;
+        reference::Constraint c{};
+        c.vars = n;
         if (idx >= 0 && idx < p.rows) {
-            for (int j = 0; j < kVars; ++j) a[j] = p.a[idx][j];
-            b = p.b[idx];
-        } else if (idx >= kBoxLower && idx < kBoxLower + kVars) {
-            a[idx - kBoxLower] = 1;
-            b = p.lower[idx - kBoxLower];
-        } else if (idx >= kBoxUpper && idx < kBoxUpper + kVars) {
-            a[idx - kBoxUpper] = -1;
-            b = -p.upper[idx - kBoxUpper];
+            for (int j = 0; j < n; ++j) c.a[j] = p.a[idx][j];
+            c.b = p.b[idx];
+        } else if (idx >= kBoxLower && idx < kBoxLower + n) {
+            c.a[idx - kBoxLower] = 1;
+            c.b = p.lower[idx - kBoxLower];
+        } else if (idx >= kBoxUpper && idx < kBoxUpper + n) {
+            c.a[idx - kBoxUpper] = -1;
+            c.b = -p.upper[idx - kBoxUpper];
         } else {
             ADD_FAILURE() << "bad active index " << idx;
             continue;
         }
-        reference::Constraint c{};
-        std::memcpy(c.a, a, sizeof a);
-        c.b = b;
         EXPECT_NEAR(reference::violation(c, s.x), 0.0, 1e-9) << "active " << idx;
-        for (int j = 0; j < kVars; ++j) grad[j] -= s.multipliers[k] * a[j];
+        for (int j = 0; j < n; ++j) grad[j] -= s.multipliers[k] * c.a[j];
     }
-    for (int j = 0; j < kVars; ++j) EXPECT_NEAR(grad[j], 0.0, 1e-8 * (1 + gnorm)) << "j=" << j;
+    for (int j = 0; j < n; ++j) EXPECT_NEAR(grad[j], 0.0, 1e-8 * (1 + gnorm)) << "j=" << j;
     for (int k = 0; k < s.active_count; ++k)
         for (int l = k + 1; l < s.active_count; ++l) EXPECT_NE(s.active[k], s.active[l]);
-    return {s.status, s.iterations};
+    // Beyond the problem's variables and active set the answer is zero.
+    for (int j = n; j < kMaxVars; ++j) EXPECT_EQ(s.x[j], 0.0) << "j=" << j;
+    for (int k = s.active_count; k < kMaxVars; ++k) {
+        EXPECT_EQ(s.active[k], 0);
+        EXPECT_EQ(s.multipliers[k], 0.0);
+    }
+}
+
+// Solves, checks the KKT conditions of the answer on their own, and compares with the reference.
+Checked check_problem(const Problem& p, const char* what, int id) {
+    SCOPED_TRACE(testing::Message() << what << " #" << id << " (n = " << p.vars << ")");
+    const int n = p.vars;
+    const Settings settings;
+    Solution s;
+    solve(p, settings, nullptr, s);
+    const reference::Result ref = reference::solve(p);
+
+    EXPECT_NE(s.status, Status::IterationLimit);
+    EXPECT_NE(s.status, Status::InvalidInput);
+    EXPECT_EQ(s.status == Status::Optimal, ref.feasible) << "solver: " << to_string(s.status);
+    if (s.status != Status::Optimal) return {s.status, s.iterations, s.active_count};
+
+    double obj = 0;
+    for (int j = 0; j < n; ++j)
+        obj += 0.5 * p.weight[j] * (s.x[j] - p.target[j]) * (s.x[j] - p.target[j]);
+    EXPECT_NEAR(s.objective, obj, 1e-12 * (1 + obj));
+    if (ref.feasible) {
+        // Objective agrees with the reference.
+        EXPECT_NEAR(s.objective, ref.objective, 1e-9 * std::fabs(ref.objective) + 1e-13);
+        // The minimiser of a strictly convex QP is unique: x agrees, measured in the W-metric.
+        double dx2 = 0;
+        for (int j = 0; j < n; ++j)
+            dx2 += p.weight[j] * (s.x[j] - ref.x[j]) * (s.x[j] - ref.x[j]);
+        EXPECT_LE(std::sqrt(dx2), 1e-7 * (1 + std::sqrt(2 * ref.objective)));
+    }
+    expect_kkt(p, s);
+    return {s.status, s.iterations, s.active_count};
 }
 
 struct Tally {
-    int optimal = 0, infeasible = 0, total = 0;
+    int optimal = 0, infeasible = 0, total = 0, most_active = 0;
     void add(Checked c) {
         ++total;
         optimal += c.status == Status::Optimal;
         infeasible += c.status == Status::Infeasible;
+        if (c.status == Status::Optimal) most_active = std::max(most_active, c.active_count);
     }
 };
 
@@ -268,11 +284,11 @@ TEST(Qp, DuplicatedAndDependentRowsMatchReference) {
                 p->b[i] = p->b[r1];
             } else if (kind == 1) {  // positive multiple of the same half-space
                 const double f = rng.uniform(0.1, 10);
-                for (int j = 0; j < kVars; ++j) p->a[i][j] = f * p->a[r1][j];
+                for (int j = 0; j < kPoseVars; ++j) p->a[i][j] = f * p->a[r1][j];
                 p->b[i] = f * p->b[r1];
             } else {  // combination of two rows: implied (kind 2) or shifted (kind 3)
                 const double f = rng.uniform(-1, 1), g = rng.uniform(0, 1);
-                for (int j = 0; j < kVars; ++j) p->a[i][j] = f * p->a[r1][j] + g * p->a[r2][j];
+                for (int j = 0; j < kPoseVars; ++j) p->a[i][j] = f * p->a[r1][j] + g * p->a[r2][j];
                 p->b[i] = f * p->b[r1] + g * p->b[r2] + (kind == 3 ? rng.uniform(-0.5, 0.5) : 0.0);
             }
         }
@@ -281,28 +297,28 @@ TEST(Qp, DuplicatedAndDependentRowsMatchReference) {
     }
 }
 
-// More than kVars planes through one point x*, with the target placed so that all of them
+// More than kPoseVars planes through one point x*, with the target placed so that all of them
 // carry a positive multiplier at x*: the optimum is x* and the active set is degenerate.
 TEST(Qp, ManyPlanesThroughOnePointMatchReference) {
     Rng rng(0x5eed0003);
     for (int n = 0; n < kPerCategory; ++n) {
         auto p = empty_problem();
         random_weights(rng, *p);
-        double xs[kVars];
+        double xs[kPoseVars];
         for (double& v : xs) v = rng.uniform(-1, 1);
         const int planes = rng.integer(7, 11);
-        double push[kVars] = {};  // sum of mu_i n_i in u-space
+        double push[kPoseVars] = {};  // sum of mu_i n_i in u-space
         for (int i = 0; i < planes; ++i) {
             random_normal(rng, p->a[i]);
             p->b[i] = dot(p->a[i], xs);
             double nn = 0;
-            for (int j = 0; j < kVars; ++j) nn += p->a[i][j] * p->a[i][j] / p->weight[j];
+            for (int j = 0; j < kPoseVars; ++j) nn += p->a[i][j] * p->a[i][j] / p->weight[j];
             const double mu = rng.chance(0.2) ? 0.0 : rng.uniform(0.1, 1.0);
-            for (int j = 0; j < kVars; ++j)
+            for (int j = 0; j < kPoseVars; ++j)
                 push[j] += mu * p->a[i][j] / std::sqrt(p->weight[j]) / std::sqrt(nn);
         }
         p->rows = planes;
-        for (int j = 0; j < kVars; ++j) p->target[j] = xs[j] - push[j] / std::sqrt(p->weight[j]);
+        for (int j = 0; j < kPoseVars; ++j) p->target[j] = xs[j] - push[j] / std::sqrt(p->weight[j]);
         // A few rows that are slack at x*.
         const int slack_rows = rng.integer(0, 2);
         for (int e = 0; e < slack_rows; ++e) {
@@ -322,7 +338,7 @@ TEST(Qp, ZeroWidthBoxesMatchReference) {
         random_target(rng, *p);
         const int pinned = rng.integer(1, 4);
         for (int k = 0; k < pinned; ++k) {
-            const int j = rng.integer(0, kVars - 1);
+            const int j = rng.integer(0, kPoseVars - 1);
             p->lower[j] = p->upper[j] = p->target[j] + rng.uniform(-1, 1) / std::sqrt(p->weight[j]);
         }
         const int rows = rng.integer(0, 14 - finite_bounds(*p));
@@ -342,7 +358,7 @@ TEST(Qp, ZeroThicknessSlabsMatchReference) {
         for (int k = 0; k < slabs; ++k) {
             add_random_row(rng, *p);
             const int i = p->rows - 1, m = p->rows++;
-            for (int j = 0; j < kVars; ++j) p->a[m][j] = -p->a[i][j];
+            for (int j = 0; j < kPoseVars; ++j) p->a[m][j] = -p->a[i][j];
             p->b[m] = -p->b[i];
         }
         const int rows = rng.integer(0, 4);
@@ -366,7 +382,7 @@ TEST(Qp, RoundedSlabIsNotInfeasible) {
         add_random_row(rng, *p);
         p->b[0] = dot(p->a[0], p->target) + rng.uniform(0.1, 1);  // violated at the target
         const double g = rng.uniform(0.2, 1), f = -g * (1 - std::pow(10.0, rng.uniform(-6, -3)));
-        for (int j = 0; j < kVars; ++j) p->a[1][j] = f * p->a[0][j] + g * p->a[0][j];
+        for (int j = 0; j < kPoseVars; ++j) p->a[1][j] = f * p->a[0][j] + g * p->a[0][j];
         p->b[1] = f * p->b[0] + g * p->b[0];
         p->rows = 2;
         const int more = rng.integer(0, 4);
@@ -390,27 +406,27 @@ TEST(Qp, InfeasibleProblemsAreDetected) {
             add_random_row(rng, *p);
             const int i = p->rows - 1, m = p->rows++;
             p->b[i] = 1;
-            for (int j = 0; j < kVars; ++j) p->a[m][j] = -p->a[i][j];
+            for (int j = 0; j < kPoseVars; ++j) p->a[m][j] = -p->a[i][j];
             p->b[m] = 1;
         } else if (kind == 1) {  // a row that the box cannot reach
-            for (int j = 0; j < kVars; ++j) {
+            for (int j = 0; j < kPoseVars; ++j) {
                 p->lower[j] = p->target[j] - 1;
                 p->upper[j] = p->target[j] + 1;
             }
             const int i = p->rows++;
             random_normal(rng, p->a[i]);
             double reach = dot(p->a[i], p->target);
-            for (int j = 0; j < kVars; ++j) reach += std::fabs(p->a[i][j]);
+            for (int j = 0; j < kPoseVars; ++j) reach += std::fabs(p->a[i][j]);
             p->b[i] = reach + rng.uniform(1e-3, 1);
         } else if (kind == 2) {  // a1.x >= 1, a2.x >= 1, (a1 + a2).x <= 1
             add_random_row(rng, *p);
             add_random_row(rng, *p);
             p->b[0] = p->b[1] = 1;
             const int m = p->rows++;
-            for (int j = 0; j < kVars; ++j) p->a[m][j] = -(p->a[0][j] + p->a[1][j]);
+            for (int j = 0; j < kPoseVars; ++j) p->a[m][j] = -(p->a[0][j] + p->a[1][j]);
             p->b[m] = -1;
         } else {  // a pinned variable against a row that needs it elsewhere
-            const int j = rng.integer(0, kVars - 1);
+            const int j = rng.integer(0, kPoseVars - 1);
             p->lower[j] = p->upper[j] = 0;
             const int i = p->rows++;
             for (double& v : p->a[i]) v = 0;
@@ -433,7 +449,7 @@ TEST(Qp, DenseBoxAndRowProblemsMatchReference) {
         auto p = empty_problem();
         random_weights(rng, *p);
         random_target(rng, *p);
-        for (int j = 0; j < kVars; ++j) {
+        for (int j = 0; j < kPoseVars; ++j) {
             const double s = 1 / std::sqrt(p->weight[j]);
             if (rng.chance(0.5)) p->lower[j] = p->target[j] + rng.uniform(-0.5, 0.3) * s;
             if (rng.chance(0.5)) p->upper[j] = p->target[j] + rng.uniform(-0.3, 0.5) * s;
@@ -457,13 +473,13 @@ TEST(Qp, FullSizeProblemsSatisfyKkt) {
         random_target(rng, *p);
         // Half-spaces that all hold at a centre c away from the target (so the problem is
         // feasible) and many of which cut the target off.
-        double c[kVars];
-        for (int j = 0; j < kVars; ++j) c[j] = p->target[j] + rng.uniform(-1, 1) / std::sqrt(p->weight[j]);
+        double c[kPoseVars];
+        for (int j = 0; j < kPoseVars; ++j) c[j] = p->target[j] + rng.uniform(-1, 1) / std::sqrt(p->weight[j]);
         const int rows = n % 2 ? kMaxRows : rng.integer(20, 64);
         for (int i = 0; i < rows; ++i) {
             random_normal(rng, p->a[i]);
             double nn = 0;
-            for (int j = 0; j < kVars; ++j) nn += p->a[i][j] * p->a[i][j] / p->weight[j];
+            for (int j = 0; j < kPoseVars; ++j) nn += p->a[i][j] * p->a[i][j] / p->weight[j];
             p->b[i] = dot(p->a[i], c) - std::sqrt(nn) * rng.uniform(0, 0.5);
         }
         p->rows = rows;
@@ -472,15 +488,15 @@ TEST(Qp, FullSizeProblemsSatisfyKkt) {
         ASSERT_EQ(solve(*p, settings, nullptr, s), Status::Optimal) << n;
         EXPECT_GT(s.active_count, 0);
         EXPECT_LE(s.max_violation, 1e-9);
-        double grad[kVars];
-        for (int j = 0; j < kVars; ++j) grad[j] = p->weight[j] * (s.x[j] - p->target[j]);
+        double grad[kPoseVars];
+        for (int j = 0; j < kPoseVars; ++j) grad[j] = p->weight[j] * (s.x[j] - p->target[j]);
         for (int k = 0; k < s.active_count; ++k) {
             ASSERT_LT(s.active[k], p->rows);
             EXPECT_GE(s.multipliers[k], 0.0);
             EXPECT_NEAR(dot(p->a[s.active[k]], s.x), p->b[s.active[k]], 1e-9);
-            for (int j = 0; j < kVars; ++j) grad[j] -= s.multipliers[k] * p->a[s.active[k]][j];
+            for (int j = 0; j < kPoseVars; ++j) grad[j] -= s.multipliers[k] * p->a[s.active[k]][j];
         }
-        for (int j = 0; j < kVars; ++j) EXPECT_NEAR(grad[j], 0.0, 1e-8) << n;
+        for (int j = 0; j < kPoseVars; ++j) EXPECT_NEAR(grad[j], 0.0, 1e-8) << n;
     }
 }
 
@@ -505,7 +521,7 @@ TEST(Qp, WarmStartGivesSameAnswer) {
         for (int k = 0; k < own.count; ++k) own.active[k] = cold.active[k];
         auto moved = empty_problem();
         *moved = *p;
-        for (double& t : moved->target) t += 1e-3 * rng.uniform(-1, 1);
+        for (int j = 0; j < kPoseVars; ++j) moved->target[j] += 1e-3 * rng.uniform(-1, 1);
         Solution previous;
         solve(*moved, settings, nullptr, previous);
         WarmStart prev;
@@ -517,7 +533,7 @@ TEST(Qp, WarmStartGivesSameAnswer) {
         junk.count = 4;
         junk.active[0] = -1;
         junk.active[1] = kMaxRows + 5;
-        junk.active[2] = kBoxLower + kVars;
+        junk.active[2] = kBoxLower + kPoseVars;
         junk.active[3] = 3 * kBoxUpper;
 
         for (const WarmStart* w : {&own, &prev, &reversed, &junk}) {
@@ -526,7 +542,7 @@ TEST(Qp, WarmStartGivesSameAnswer) {
             ASSERT_EQ(warm.status, cold.status) << n;
             if (cold.status != Status::Optimal) continue;
             EXPECT_NEAR(warm.objective, cold.objective, 1e-9 * cold.objective + 1e-13) << n;
-            for (int j = 0; j < kVars; ++j)
+            for (int j = 0; j < kPoseVars; ++j)
                 EXPECT_NEAR(warm.x[j], cold.x[j], 1e-7 / std::sqrt(p->weight[j])) << n;
             EXPECT_LE(warm.max_violation, 1e-9);
         }
@@ -568,7 +584,7 @@ TEST(Qp, InvalidInputIsRejected) {
     *p = *base; p->rows = kMaxRows + 1; check(*p, "too many rows");
     {
         WarmStart w;
-        w.count = kVars + 1;
+        w.count = kMaxVars + 1;
         check(*base, "warm start too long", &w);
         w.count = -1;
         check(*base, "negative warm start", &w);
@@ -605,13 +621,13 @@ TEST(Qp, ZeroRowsAreSkippedOrInfeasible) {
 
 TEST(Qp, UnconstrainedReturnsTarget) {
     auto p = empty_problem();
-    for (int j = 0; j < kVars; ++j) p->target[j] = 0.1 * (j + 1);
+    for (int j = 0; j < kPoseVars; ++j) p->target[j] = 0.1 * (j + 1);
     p->rows = 1;
     p->a[0][0] = 1;
     p->b[0] = -5;  // satisfied at the target
     Solution s;
     ASSERT_EQ(solve(*p, Settings{}, nullptr, s), Status::Optimal);
-    for (int j = 0; j < kVars; ++j) EXPECT_EQ(s.x[j], p->target[j]);
+    for (int j = 0; j < kPoseVars; ++j) EXPECT_EQ(s.x[j], p->target[j]);
     EXPECT_EQ(s.objective, 0.0);
     EXPECT_EQ(s.active_count, 0);
     EXPECT_EQ(s.iterations, 0);
@@ -641,7 +657,7 @@ TEST(Qp, IterationCapReturnsLastIterate) {
     auto p = empty_problem();
     random_target(rng, *p);
     for (int i = 0; i < 6; ++i) {  // six independent violated rows need at least six additions
-        for (int j = 0; j < kVars; ++j) p->a[i][j] = (i == j) ? 1.0 : 0.1;
+        for (int j = 0; j < kPoseVars; ++j) p->a[i][j] = (i == j) ? 1.0 : 0.1;
         p->b[i] = dot(p->a[i], p->target) + 1.0;
     }
     p->rows = 6;
@@ -722,6 +738,326 @@ TEST(Qp, SolveDoesNotAllocate) {
     solve(*bad, Settings{}, nullptr, s);
     const long end = g_new_calls.load();
     EXPECT_EQ(end, start);
+    EXPECT_GT(optimal, 0);
+}
+
+// ---- Any number of variables: the pose plus slack variables of compliant contacts ----
+
+constexpr int kSizes[] = {1, 3, 6, 9, 12, 16};
+
+TEST(Qp, RandomProblemsOfEverySizeMatchReference) {
+    Rng rng(0x5eed0101);
+    for (const int n : kSizes) {
+        Tally tally;
+        const int count = n <= 6 ? 500 : 200;  // the reference's cost grows with n
+        for (int k = 0; k < count; ++k) {
+            auto p = empty_problem(n);
+            random_weights(rng, *p);
+            random_target(rng, *p);
+            const int rows = rng.integer(0, 8);
+            for (int i = 0; i < rows; ++i) add_random_row(rng, *p);
+            random_box(rng, *p, 12 - rows);
+            tally.add(check_problem(*p, "every size", k));
+        }
+        EXPECT_EQ(tally.total, count) << n;
+        EXPECT_GT(tally.optimal, count / 3) << n;
+        // Active sets as large as the problem allows occur: more than six once n is larger.
+        EXPECT_GE(tally.most_active, std::min(n, 7)) << n;
+    }
+}
+
+// The shape the step builds: pose rows that may sink in by a slack s_k >= 0 (weight k_k,
+// target 0, sometimes capped), a_pose . x + s_k >= b; several rows may share a slack.
+TEST(Qp, RandomSlackProblemsMatchReference) {
+    Rng rng(0x5eed0102);
+    Tally tally;
+    for (int k = 0; k < 300; ++k) {
+        const int slacks = rng.integer(1, 3);
+        const int n = kPoseVars + slacks;
+        auto p = empty_problem(n);
+        random_weights(rng, *p);
+        random_target(rng, *p);
+        for (int j = kPoseVars; j < n; ++j) {
+            p->weight[j] = std::pow(10.0, rng.uniform(-2, 3));
+            p->target[j] = 0;
+            p->lower[j] = 0;
+            if (rng.chance(0.5)) p->upper[j] = rng.uniform(0, 1) / std::sqrt(p->weight[j]);
+        }
+        const int rows = rng.integer(1, 5);
+        for (int i = 0; i < rows; ++i) {
+            random_normal(rng, p->a[i], kPoseVars);
+            for (int j = kPoseVars; j < n; ++j) p->a[i][j] = 0;
+            // A compliant contact, or else a rigid one.
+            if (rng.chance(0.7)) p->a[i][rng.integer(kPoseVars, n - 1)] = 1;
+            double nn = 0;
+            for (int j = 0; j < kPoseVars; ++j) nn += p->a[i][j] * p->a[i][j] / p->weight[j];
+            p->b[i] = dot(p->a[i], p->target, n) + std::sqrt(nn) * rng.uniform(-0.3, 1.0);
+        }
+        p->rows = rows;
+        tally.add(check_problem(*p, "slacks", k));
+    }
+    EXPECT_GT(tally.optimal, 200);
+}
+
+// One compliant contact. Three translational variables (weight 1) pulled to t = (0, 0, -d),
+// against the surface z >= 0 whose tissue gives way by s (weight k, target 0, s >= 0):
+// x_z + s >= 0. At the optimum the row is active and one force lambda stretches both springs,
+// x_z - t_z = lambda = k s with x_z = -s, so
+//   s = d / (1 + k),  x_z = -d / (1 + k),  lambda = d k / (1 + k),
+//   objective = d^2 k / (2 (1 + k)).
+TEST(Qp, SingleSlackMatchesClosedForm) {
+    for (const double d : {1e-3, 0.3, 2.0}) {
+        for (const double k : {1e-2, 1.0, 4.0, 1e3}) {
+            SCOPED_TRACE(testing::Message() << "d=" << d << " k=" << k);
+            auto p = empty_problem(4);
+            p->target[2] = -d;
+            p->weight[3] = k;
+            p->lower[3] = 0;
+            p->rows = 1;
+            p->a[0][0] = p->a[0][1] = 0;
+            p->a[0][2] = p->a[0][3] = 1;
+            p->b[0] = 0;
+            Solution s;
+            ASSERT_EQ(solve(*p, Settings{}, nullptr, s), Status::Optimal);
+            EXPECT_NEAR(s.x[0], 0.0, 1e-12);
+            EXPECT_NEAR(s.x[1], 0.0, 1e-12);
+            EXPECT_NEAR(s.x[2], -d / (1 + k), 1e-12);
+            EXPECT_NEAR(s.x[3], d / (1 + k), 1e-12);
+            ASSERT_EQ(s.active_count, 1);
+            EXPECT_EQ(s.active[0], 0);
+            EXPECT_NEAR(s.multipliers[0], d * k / (1 + k), 1e-12);
+            EXPECT_NEAR(s.objective, d * d * k / (2 * (1 + k)), 1e-12);
+        }
+    }
+    // One case by hand: d = 0.3, k = 4 gives x_z = -0.06, s = 0.06, lambda = 0.24.
+    auto p = empty_problem(4);
+    p->target[2] = -0.3;
+    p->weight[3] = 4;
+    p->lower[3] = 0;
+    p->rows = 1;
+    p->a[0][0] = p->a[0][1] = 0;
+    p->a[0][2] = p->a[0][3] = 1;
+    p->b[0] = 0;
+    Solution s;
+    ASSERT_EQ(solve(*p, Settings{}, nullptr, s), Status::Optimal);
+    EXPECT_NEAR(s.x[2], -0.06, 1e-12);
+    EXPECT_NEAR(s.x[3], 0.06, 1e-12);
+    EXPECT_NEAR(s.multipliers[0], 0.24, 1e-12);
+}
+
+// Two slacks in series on one row, x_z + s1 + s2 >= 0, with the tool pulled to t_z = -d = -1:
+// s1 (weight k1 = 2, box [0, c1]) and s2 (weight k2 = 3, box [0, inf)).
+// Below the cap the three springs carry one force: x_z + d = k1 s1 = k2 s2 = lambda, so
+//   lambda = d / (1 + 1/k1 + 1/k2) = 6/11, s1 = 3/11, s2 = 2/11, x_z = -5/11,
+// which holds while s1 = 3/11 <= c1. Above it s1 sits at c1 and its cap takes the rest:
+//   lambda = (d - c1) k2 / (1 + k2), s2 = lambda / k2, x_z = lambda - d, cap multiplier
+//   mu = lambda - k1 c1; for c1 = 0.1: lambda = 0.675, s2 = 0.225, x_z = -0.325, mu = 0.475.
+TEST(Qp, SeriesSlacksShareTheLoadBelowTheCapAndSaturateAboveIt) {
+    auto make = [](double c1) {
+        auto p = empty_problem(5);
+        p->target[2] = -1;
+        p->weight[3] = 2;
+        p->lower[3] = 0;
+        p->upper[3] = c1;
+        p->weight[4] = 3;
+        p->lower[4] = 0;
+        p->rows = 1;
+        p->a[0][0] = p->a[0][1] = 0;
+        p->a[0][2] = p->a[0][3] = p->a[0][4] = 1;
+        p->b[0] = 0;
+        return p;
+    };
+    {  // below the cap: both slacks share the load, the cap is not active
+        const auto p = make(0.5);
+        Solution s;
+        ASSERT_EQ(solve(*p, Settings{}, nullptr, s), Status::Optimal);
+        EXPECT_NEAR(s.x[0], 0.0, 1e-12);
+        EXPECT_NEAR(s.x[1], 0.0, 1e-12);
+        EXPECT_NEAR(s.x[2], -5.0 / 11, 1e-12);
+        EXPECT_NEAR(s.x[3], 3.0 / 11, 1e-12);
+        EXPECT_NEAR(s.x[4], 2.0 / 11, 1e-12);
+        ASSERT_EQ(s.active_count, 1);
+        EXPECT_EQ(s.active[0], 0);
+        EXPECT_NEAR(s.multipliers[0], 6.0 / 11, 1e-12);
+        const double obj = 0.5 * (6.0 / 11) * (6.0 / 11) + 0.5 * 2 * (3.0 / 11) * (3.0 / 11) +
+                           0.5 * 3 * (2.0 / 11) * (2.0 / 11);
+        EXPECT_NEAR(s.objective, obj, 1e-12);
+    }
+    {  // above it: s1 at its cap, s2 takes the rest
+        const auto p = make(0.1);
+        Solution s;
+        ASSERT_EQ(solve(*p, Settings{}, nullptr, s), Status::Optimal);
+        EXPECT_NEAR(s.x[0], 0.0, 1e-12);
+        EXPECT_NEAR(s.x[1], 0.0, 1e-12);
+        EXPECT_NEAR(s.x[2], -0.325, 1e-12);
+        EXPECT_EQ(s.x[3], 0.1);  // an active bound holds exactly
+        EXPECT_NEAR(s.x[4], 0.225, 1e-12);
+        ASSERT_EQ(s.active_count, 2);
+        double row = -1, cap = -1;
+        for (int k = 0; k < 2; ++k) {
+            if (s.active[k] == 0) row = s.multipliers[k];
+            if (s.active[k] == kBoxUpper + 3) cap = s.multipliers[k];
+        }
+        EXPECT_NEAR(row, 0.675, 1e-12);
+        EXPECT_NEAR(cap, 0.475, 1e-12);
+        const double obj = 0.5 * 0.675 * 0.675 + 0.5 * 2 * 0.1 * 0.1 + 0.5 * 3 * 0.225 * 0.225;
+        EXPECT_NEAR(s.objective, obj, 1e-12);
+    }
+}
+
+TEST(Qp, VariableCountOutOfRangeIsRejected) {
+    auto p = empty_problem(kMaxVars);
+    p->rows = 1;
+    p->a[0][0] = 1;
+    p->b[0] = 1;
+    Solution s;
+    for (const int vars : {0, kMaxVars + 1, -1}) {
+        p->vars = vars;
+        EXPECT_EQ(solve(*p, Settings{}, nullptr, s), Status::InvalidInput) << vars;
+        EXPECT_EQ(s.status, Status::InvalidInput) << vars;
+    }
+    for (const int vars : {1, kMaxVars}) {  // the limits themselves are fine
+        p->vars = vars;
+        EXPECT_EQ(solve(*p, Settings{}, nullptr, s), Status::Optimal) << vars;
+    }
+}
+
+// Entries beyond vars are not part of the problem: garbage there changes no bit of the answer,
+// and the answer's own entries beyond vars are zero whatever the Solution held before.
+TEST(Qp, EntriesBeyondVarsAreIgnored) {
+    Rng rng(0x5eed0103);
+    for (const int n : {1, 3, 6, 9, 15}) {
+        for (int k = 0; k < 50; ++k) {
+            auto p = empty_problem(n);
+            random_weights(rng, *p);
+            random_target(rng, *p);
+            const int rows = rng.integer(0, 20);
+            for (int i = 0; i < rows; ++i) add_random_row(rng, *p);
+            random_box(rng, *p, 2 * n);
+            Solution clean;
+            solve(*p, Settings{}, nullptr, clean);
+            auto dirty = empty_problem(n);
+            *dirty = *p;
+            for (int j = n; j < kMaxVars; ++j) {
+                dirty->weight[j] = j % 2 ? kNaN : -1;
+                dirty->target[j] = kInf;
+                dirty->lower[j] = 1;
+                dirty->upper[j] = j % 2 ? -1 : kNaN;
+                for (int i = 0; i < kMaxRows; ++i) dirty->a[i][j] = kNaN;
+            }
+            Solution s;  // left over from a larger problem
+            for (double& v : s.x) v = 7;
+            for (int& a : s.active) a = 7;
+            for (double& m : s.multipliers) m = 7;
+            solve(*dirty, Settings{}, nullptr, s);
+            EXPECT_TRUE(same_bits(clean, s)) << n << " #" << k;
+            for (int j = n; j < kMaxVars; ++j) EXPECT_EQ(s.x[j], 0.0);
+            for (int i = s.active_count; i < kMaxVars; ++i) EXPECT_EQ(s.active[i], 0);
+        }
+    }
+}
+
+// A variable in no row and with no bound stays at its target and changes nothing else: the
+// 6-variable problem (the solver's fixed-size path) and the same problem with a seventh such
+// variable (the run-time-size path) give the same status, active set and point.
+TEST(Qp, UnusedVariableChangesNothing) {
+    Rng rng(0x5eed0104);
+    int optimal = 0;
+    for (int k = 0; k < 1000; ++k) {
+        auto p = empty_problem();
+        random_weights(rng, *p);
+        random_target(rng, *p);
+        const int rows = rng.integer(0, 24);
+        for (int i = 0; i < rows; ++i) add_random_row(rng, *p);
+        random_box(rng, *p, 12);
+        auto q = empty_problem(kPoseVars + 1);
+        *q = *p;
+        q->vars = kPoseVars + 1;
+        q->weight[kPoseVars] = 0.5;
+        q->target[kPoseVars] = 0.25;
+        q->lower[kPoseVars] = -kInf;
+        q->upper[kPoseVars] = kInf;
+        for (int i = 0; i < rows; ++i) q->a[i][kPoseVars] = 0;
+        Solution a, b;
+        solve(*p, Settings{}, nullptr, a);
+        solve(*q, Settings{}, nullptr, b);
+        ASSERT_EQ(a.status, b.status) << k;
+        if (a.status != Status::Optimal) continue;
+        ++optimal;
+        ASSERT_EQ(a.active_count, b.active_count) << k;
+        for (int i = 0; i < a.active_count; ++i) EXPECT_EQ(a.active[i], b.active[i]) << k;
+        for (int j = 0; j < kPoseVars; ++j)
+            EXPECT_NEAR(a.x[j], b.x[j], 1e-12 * (1 + std::fabs(a.x[j])) / std::sqrt(p->weight[j]))
+                << k;
+        EXPECT_EQ(b.x[kPoseVars], 0.25);
+        EXPECT_NEAR(a.objective, b.objective, 1e-12 * (1 + a.objective)) << k;
+    }
+    EXPECT_GT(optimal, 300);
+}
+
+// Many rows, beyond the reference's reach, at every size: checked by the KKT conditions.
+TEST(Qp, FullSizeProblemsOfEverySizeSatisfyKkt) {
+    Rng rng(0x5eed0105);
+    for (const int n : kSizes) {
+        for (int k = 0; k < 60; ++k) {
+            SCOPED_TRACE(testing::Message() << "n=" << n << " #" << k);
+            auto p = empty_problem(n);
+            random_weights(rng, *p);
+            random_target(rng, *p);
+            // Half-spaces that all hold at a centre away from the target (so the problem is
+            // feasible), many of which cut the target off.
+            double c[kMaxVars];
+            for (int j = 0; j < n; ++j)
+                c[j] = p->target[j] + rng.uniform(-1, 1) / std::sqrt(p->weight[j]);
+            const int rows = k % 2 ? kMaxRows : rng.integer(20, 64);
+            for (int i = 0; i < rows; ++i) {
+                random_normal(rng, p->a[i], n);
+                double nn = 0;
+                for (int j = 0; j < n; ++j) nn += p->a[i][j] * p->a[i][j] / p->weight[j];
+                p->b[i] = dot(p->a[i], c, n) - std::sqrt(nn) * rng.uniform(0, 0.5);
+            }
+            p->rows = rows;
+            Solution s;
+            ASSERT_EQ(solve(*p, Settings{}, nullptr, s), Status::Optimal);
+            EXPECT_GT(s.active_count, 0);
+            EXPECT_LE(s.max_violation, 1e-9);
+            expect_kkt(*p, s);
+        }
+    }
+}
+
+// Same input, same bits, and no allocation, at every size.
+TEST(Qp, EverySizeIsDeterministicAndDoesNotAllocate) {
+    Rng rng(0x5eed0106);
+    std::vector<std::unique_ptr<Problem>> problems;
+    for (const int n : kSizes) {
+        for (int k = 0; k < 40; ++k) {
+            auto p = empty_problem(n);
+            random_weights(rng, *p);
+            random_target(rng, *p);
+            const int rows = k % 4 == 0 ? kMaxRows : rng.integer(0, 40);
+            for (int i = 0; i < rows; ++i) add_random_row(rng, *p);
+            random_box(rng, *p, 2 * n);
+            problems.push_back(std::move(p));
+        }
+    }
+    std::vector<Solution> first(problems.size());
+    for (size_t k = 0; k < problems.size(); ++k) solve(*problems[k], Settings{}, nullptr, first[k]);
+    WarmStart warm;
+    warm.count = kMaxVars;
+    for (int k = 0; k < kMaxVars; ++k) warm.active[k] = k % 3 ? k : kBoxLower + k;
+    Solution again, warmed;
+    const long start = g_new_calls.load();
+    int same = 0, optimal = 0;
+    // In reverse order, so no state can carry over from the previous call.
+    for (size_t k = problems.size(); k-- > 0;) {
+        solve(*problems[k], Settings{}, nullptr, again);
+        same += same_bits(first[k], again);
+        optimal += solve(*problems[k], Settings{}, &warm, warmed) == Status::Optimal;
+    }
+    const long end = g_new_calls.load();
+    EXPECT_EQ(end, start);
+    EXPECT_EQ(same, static_cast<int>(problems.size()));
     EXPECT_GT(optimal, 0);
 }
 

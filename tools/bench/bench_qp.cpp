@@ -1,5 +1,6 @@
 // Time of one qp::solve on servo-like problems: 6 variables, 8 / 24 / 64 rows, the haptic weight
-// pattern (translation 1, rotation 1e-4) and a local-solution box, from a fixed-seed generator.
+// pattern (translation 1, rotation 1e-4) and a local-solution box, from a fixed-seed generator;
+// and the same problems with 10 slack variables added (compliant contacts, 16 variables).
 //
 //   bench_qp [google benchmark flags]   per-solve time via Google Benchmark
 //   bench_qp --stats                    median, p99 and max over 100000 solves (steady_clock)
@@ -35,7 +36,8 @@ std::vector<std::unique_ptr<Problem>> make_pool(int rows, uint64_t seed) {
     std::vector<std::unique_ptr<Problem>> pool;
     for (int n = 0; n < kPool; ++n) {
         auto p = std::make_unique<Problem>();
-        for (int j = 0; j < kVars; ++j) {
+        p->vars = kPoseVars;
+        for (int j = 0; j < kPoseVars; ++j) {
             p->weight[j] = j < 3 ? 1.0 : 1e-4;
             p->target[j] = j < 3 ? uniform(g, -1e-3, 1e-3) : uniform(g, -0.05, 0.05);
             const double reach = j < 3 ? 2e-3 : 0.1;
@@ -43,13 +45,13 @@ std::vector<std::unique_ptr<Problem>> make_pool(int rows, uint64_t seed) {
             p->upper[j] = p->target[j] + reach * uniform(g, 0.5, 1.0);
         }
         // The centre lies inside the box and inside every row, so every problem is feasible.
-        double centre[kVars];
-        for (int j = 0; j < kVars; ++j)
+        double centre[kPoseVars];
+        for (int j = 0; j < kPoseVars; ++j)
             centre[j] = p->target[j] + (j < 3 ? 2e-3 : 0.1) * 0.4 * uniform(g, -1, 1);
         p->rows = rows;
         for (int i = 0; i < rows; ++i) {
             double nn = 0, ac = 0;
-            for (int j = 0; j < kVars; ++j) {
+            for (int j = 0; j < kPoseVars; ++j) {
                 // Translation rows of unit size, rotation columns like lever arms (~1 cm).
                 p->a[i][j] = (j < 3 ? 1.0 : 1e-2) * uniform(g, -1, 1);
                 nn += p->a[i][j] * p->a[i][j] / p->weight[j];
@@ -99,6 +101,44 @@ void BM_SolveWarm(benchmark::State& state) {
     }
 }
 BENCHMARK(BM_SolveWarm)->Arg(8)->Arg(24)->Arg(64);
+
+// The pose problems with every row made compliant: kMaxVars - kPoseVars slacks (weight 10, a
+// stiffer spring than the pose's, box [0, inf)), row i sinking by slack i mod their count.
+std::vector<std::unique_ptr<Problem>> make_slack_pool(int rows, uint64_t seed) {
+    auto pool = make_pool(rows, seed);
+    constexpr int slacks = kMaxVars - kPoseVars;
+    for (auto& p : pool) {
+        p->vars = kMaxVars;
+        for (int j = kPoseVars; j < kMaxVars; ++j) {
+            p->weight[j] = 10.0;
+            p->target[j] = 0.0;
+            p->lower[j] = 0.0;
+            p->upper[j] = std::numeric_limits<double>::infinity();
+        }
+        for (int i = 0; i < rows; ++i)
+            for (int j = kPoseVars; j < kMaxVars; ++j)
+                p->a[i][j] = (j - kPoseVars == i % slacks) ? 1.0 : 0.0;
+    }
+    return pool;
+}
+
+void BM_SolveSlacks(benchmark::State& state) {
+    const auto pool = make_slack_pool(static_cast<int>(state.range(0)), 42);
+    const Settings settings;
+    Solution s;
+    size_t n = 0;
+    long iterations = 0, solves = 0;
+    for (auto _ : state) {
+        solve(*pool[n], settings, nullptr, s);
+        benchmark::DoNotOptimize(s);
+        iterations += s.iterations;
+        ++solves;
+        n = (n + 1) % pool.size();
+    }
+    state.counters["iters/solve"] = static_cast<double>(iterations) / static_cast<double>(solves);
+    state.counters["active"] = s.active_count;
+}
+BENCHMARK(BM_SolveSlacks)->Arg(8)->Arg(24)->Arg(64);
 
 int run_stats() {
     constexpr int kSolves = 100000;
