@@ -58,7 +58,7 @@ void check_case(const std::string& name) {
         ASSERT_TRUE(found);
         passes.push_back(c);
     }
-    const ModelBuild mb = build_model(scene.scene.tool.mesh, scene.scene.objects, RendererSettings{});
+    const ModelBuild mb = build_model(scene.scene, RendererSettings{});
     ASSERT_TRUE(mb.model) << mb.error;
     expect_probe_stops_at_floor(*mb.model, scene.scene.trajectory, passes, scene.scene.rate_hz, 0.2e-3);
 }

@@ -28,8 +28,8 @@ void compare_on(const TriMesh& tool_mesh, double scale, int trials, unsigned see
         const Vec3 p(u(rng) * scale * 0.2, u(rng) * scale * 0.2, u(rng) * scale * 0.2);
         place_tool_vertices(tool, q, p, verts.data());
         place_tool_planes(tool, q, p, normals.data(), offsets.data());
-        ConvexView slow = tool_convex_view(tool, verts.data(), normals.data(), offsets.data(), nullptr);
-        ConvexView fast = tool_convex_view(tool, verts.data(), normals.data(), offsets.data(), &q);
+        ConvexView slow = tool_convex_view(tool, 0, verts.data(), normals.data(), offsets.data(), nullptr);
+        ConvexView fast = tool_convex_view(tool, 0, verts.data(), normals.data(), offsets.data(), &q);
         // A triangle near the tool: around a random tool vertex.
         const Vec3 c = verts[size_t(rng() % verts.size())];
         const double s = scale * (0.05 + 0.5 * (u(rng) + 1.0));
@@ -73,8 +73,8 @@ void capsule_bound_holds(const TriMesh& tool_mesh, double scale, unsigned seed) 
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     std::vector<Vec3> verts(tool.mesh.vertices.size()), normals(tool.face_normals.size());
     std::vector<double> offsets(tool.face_normals.size());
-    Vec3 caps[kToolCapsules + 1];
-    const auto* tris = reinterpret_cast<const uint32_t (*)[3]>(tool.mesh.triangles.data());
+    Vec3 caps[kMaxToolPieces * (kToolCapsules + 1)];
+    const auto* tris = piece_triangles(tool, 0);
     int useful = 0;
     for (int t = 0; t < 3000; ++t) {
         const Quat q = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
@@ -82,8 +82,8 @@ void capsule_bound_holds(const TriMesh& tool_mesh, double scale, unsigned seed) 
         place_tool_vertices(tool, q, p, verts.data());
         place_tool_planes(tool, q, p, normals.data(), offsets.data());
         place_tool_capsule(tool, q, p, caps);
-        const ConvexView with = tool_convex_view(tool, verts.data(), normals.data(), offsets.data(), &q, caps);
-        const ConvexView without = tool_convex_view(tool, verts.data(), normals.data(), offsets.data(), &q);
+        const ConvexView with = tool_convex_view(tool, 0, verts.data(), normals.data(), offsets.data(), &q, caps);
+        const ConvexView without = tool_convex_view(tool, 0, verts.data(), normals.data(), offsets.data(), &q);
         const Vec3 c = verts[size_t(rng() % verts.size())] + 0.2 * scale * Vec3(u(rng), u(rng), u(rng));
         const double s = 0.3 * scale;
         const Vec3 a = c + s * Vec3(u(rng), u(rng), u(rng)), b = c + s * Vec3(u(rng), u(rng), u(rng)),
@@ -107,10 +107,10 @@ TEST(CapsuleBound, NeverExceedsTheExactDistance) {
 TEST(CapsuleBound, OnlyLongToolsUseCapsules) {
     const ModelBuild box = build_model(make_box(Vec3(1e-3, 2e-3, 0.5e-3)), {}, RendererSettings{});
     ASSERT_TRUE(box.model);
-    EXPECT_EQ(box.model->tool.capsule_count, 0);
+    EXPECT_EQ(box.model->tool.pieces[0].capsule_count, 0);
     const ModelBuild probe = build_model(make_probe_tip_collision(ProbeKind::Williams), {}, RendererSettings{});
     ASSERT_TRUE(probe.model);
-    EXPECT_EQ(probe.model->tool.capsule_count, kToolCapsules);
+    EXPECT_EQ(probe.model->tool.pieces[0].capsule_count, kToolCapsules);
 }
 
 }  // namespace

@@ -274,6 +274,66 @@ TEST_F(SceneFileTest, CollectsAllErrors) {
     EXPECT_TRUE(has_error(load, "scene.json", "/trajectory", "missing.csv"));
 }
 
+
+constexpr const char* kMaterials = R"("materials": {
+    "enamel": {"kind": "rigid", "friction_static": 0.2, "friction_kinetic": 0.1},
+    "gum": {"kind": "compliant", "stiffness_N_per_m": 400, "friction_static": 0.5},
+    "floor": {"kind": "compliant", "yield_curve_N_mm": [[0, 0], [0.25, 0.05], [0.5, 0.08]]}
+  },)";
+
+TEST_F(SceneFileTest, MaterialsAndRegionsAreRead) {
+    const SceneLoad load = load_scene(scene(
+        R"({"name": "tooth", "mesh": "meshes/cube.obj", "material": "enamel"},
+           {"name": "gum", "mesh": "meshes/cube.obj", "material": "gum",
+            "regions": [{"name": "floor MB", "material": "floor", "center": [0.005, 0.01, 0.005], "radius": 0.003,
+                         "normal": [0, 2, 0], "min_cos": 0.5}]},
+           {"name": "plain", "mesh": "meshes/cube.obj"})",
+        kMaterials));
+    ASSERT_TRUE(load.ok()) << load.errors.front();
+    const SceneFile& s = load.scene;
+    ASSERT_EQ(s.materials.size(), 3u);
+    ASSERT_EQ(s.objects.size(), 3u);
+    const ContactMaterial& enamel = s.materials[size_t(s.objects[0].material)];
+    EXPECT_EQ(enamel.name, "enamel");
+    EXPECT_FALSE(enamel.compliant);
+    EXPECT_EQ(enamel.friction_static, 0.2);
+    EXPECT_EQ(enamel.friction_kinetic, 0.1);
+    const ContactMaterial& gum = s.materials[size_t(s.objects[1].material)];
+    EXPECT_TRUE(gum.compliant);
+    ASSERT_EQ(gum.yield_curve.size(), 1u);
+    EXPECT_DOUBLE_EQ(gum.yield_curve[0][1] / gum.yield_curve[0][0], 1.0 / 400.0);
+    EXPECT_EQ(gum.friction_kinetic, 0.5);  // one coefficient given: both
+    ASSERT_EQ(s.objects[1].regions.size(), 1u);
+    const MaterialRegion& r = s.objects[1].regions[0];
+    EXPECT_EQ(s.materials[size_t(r.material)].name, "floor");
+    EXPECT_EQ(s.materials[size_t(r.material)].yield_curve.size(), 2u);
+    EXPECT_DOUBLE_EQ(s.materials[size_t(r.material)].yield_curve[1][1], 0.08e-3);  // mm -> m
+    EXPECT_DOUBLE_EQ(r.normal.y, 1.0);
+    EXPECT_EQ(r.radius_m, 0.003);
+    EXPECT_EQ(r.min_cos, 0.5);
+    EXPECT_EQ(s.objects[2].material, -1);  // rigid and frictionless
+}
+
+TEST_F(SceneFileTest, BadMaterialsAreReportedAtTheirPlace) {
+    const SceneLoad load = load_scene(scene(
+        R"({"name": "a", "mesh": "meshes/cube.obj", "material": "nothing"},
+           {"name": "b", "mesh": "meshes/cube.obj", "regions": [{"material": "soft", "center": [0, 0, 0]}]})",
+        R"("materials": {
+            "hard": {"kind": "rigid", "stiffness_N_per_m": 5},
+            "soft": {"kind": "compliant", "yield_curve_N_mm": [[0, 0], [0.25, 0.05], [0.5, 0.3]]},
+            "slippery": {"kind": "rigid", "friction_static": 0.1, "friction_kinetic": 0.4},
+            "odd": {"kind": "jelly"},
+            "vague": {"kind": "compliant"}
+          },)"));
+    EXPECT_TRUE(has_error(load, "scene.json", "/objects/0/material", "unknown material"));
+    EXPECT_TRUE(has_error(load, "scene.json", "/objects/1/regions/0/radius", "positive"));
+    EXPECT_TRUE(has_error(load, "scene.json", "/materials/hard", "rigid material"));
+    EXPECT_TRUE(has_error(load, "scene.json", "/materials/soft/yield_curve_N_mm/2", "softens"));
+    EXPECT_TRUE(has_error(load, "scene.json", "/materials/slippery/friction_kinetic", "exceeds"));
+    EXPECT_TRUE(has_error(load, "scene.json", "/materials/odd/kind", "jelly"));
+    EXPECT_TRUE(has_error(load, "scene.json", "/materials/vague", "exactly one"));
+}
+
 TEST_F(SceneFileTest, MissingTrajectoryFile) {
     const SceneLoad load = load_scene(scene(kObject, "", R"("tool": {"name": "probe", "mesh": "meshes/cube.obj"},)",
                                             R"("trajectory": "nope.csv")"));

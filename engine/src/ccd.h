@@ -19,7 +19,7 @@ struct CcdScratch {
     Vec3* normals;      // tool face count
     double* offsets;    // tool face count
     Quat* rotation;     // the rotation the planes are placed with
-    Vec3* capsule;      // kToolCapsules + 1: the bounding capsules' axis points at that pose
+    Vec3* capsule;      // (kToolCapsules + 1) per piece: the bounding capsules' axis points at that pose
 };
 
 struct CcdResult {

@@ -440,4 +440,16 @@ ExactCheck exact_check(const TriMesh& tool, const Pose& tool_pose, const std::ve
     return out;
 }
 
+ExactCheck exact_check(const std::vector<TriMesh>& tool_pieces, const Pose& tool_pose,
+                       const std::vector<PlacedMesh>& objects, double gap_limit) {
+    ExactCheck out;
+    out.distance_m = gap_limit > 0.0 && std::isfinite(gap_limit) ? gap_limit : 0.0;
+    for (const TriMesh& piece : tool_pieces) {
+        const ExactCheck c = exact_check(piece, tool_pose, objects, gap_limit);
+        out.penetration_m = std::max(out.penetration_m, c.penetration_m);
+        out.distance_m = std::min(out.distance_m, c.distance_m);
+    }
+    return out;
+}
+
 }  // namespace sulcus

@@ -102,4 +102,42 @@ MeshTopology build_topology(const TriMesh& mesh) {
     return topo;
 }
 
+std::vector<TriMesh> connected_components(const TriMesh& mesh) {
+    const size_t nv = mesh.vertices.size();
+    std::vector<uint32_t> parent(nv);
+    for (size_t v = 0; v < nv; ++v) parent[v] = uint32_t(v);
+    auto find = [&](uint32_t v) {
+        while (parent[v] != v) v = parent[v] = parent[parent[v]];
+        return v;
+    };
+    for (const auto& t : mesh.triangles) {
+        if (t[0] >= nv || t[1] >= nv || t[2] >= nv) continue;
+        parent[find(t[1])] = find(t[0]);
+        parent[find(t[2])] = find(t[0]);
+    }
+    std::vector<TriMesh> out;
+    std::vector<int> component(nv, -1);  // by root vertex
+    std::vector<uint32_t> local(nv, UINT32_MAX);
+    for (const auto& t : mesh.triangles) {
+        if (t[0] >= nv || t[1] >= nv || t[2] >= nv) continue;
+        const uint32_t root = find(t[0]);
+        if (component[root] < 0) {
+            component[root] = int(out.size());
+            out.emplace_back();
+        }
+        TriMesh& m = out[size_t(component[root])];
+        std::array<uint32_t, 3> tri{};
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t v = t[size_t(k)];
+            if (local[v] == UINT32_MAX) {
+                local[v] = uint32_t(m.vertices.size());
+                m.vertices.push_back(mesh.vertices[v]);
+            }
+            tri[size_t(k)] = local[v];
+        }
+        m.triangles.push_back(tri);
+    }
+    return out;
+}
+
 }  // namespace sulcus

@@ -1,9 +1,10 @@
-// Builds the immutable model of the renderer: the convex tool's features and each object's
-// world-placed mesh, adjacency and BVH.
+// Builds the immutable model of the renderer: the tool's convex pieces with their features and
+// each object's world-placed mesh, adjacency and BVH.
 #include "sulcus/engine/renderer.h"
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace sulcus {
@@ -17,9 +18,10 @@ double mesh_scale(const TriMesh& m) {
     return std::max(s, 1e-9);
 }
 
-// The capsule around the principal axis of the vertices (power iteration on their covariance).
-void set_bounding_capsule(ModelTool& tool) {
-    const auto& vs = tool.mesh.vertices;
+// The capsules around the principal axis of a piece's vertices (power iteration on their
+// covariance).
+void set_bounding_capsule(const TriMesh& piece_mesh, ToolPiece& tool) {
+    const auto& vs = piece_mesh.vertices;
     Vec3 c(0.0);
     for (const Vec3& v : vs) c += v;
     c /= double(vs.size());
@@ -56,7 +58,7 @@ void set_bounding_capsule(ModelTool& tool) {
             r[size_t(near)] = std::max(r[size_t(near)], radial(v));
         }
     }
-    for (const auto& tri : tool.mesh.triangles)
+    for (const auto& tri : piece_mesh.triangles)
         for (int e = 0; e < 3; ++e) {
             const Vec3& a = vs[tri[size_t(e)]];
             const Vec3& b = vs[tri[size_t((e + 1) % 3)]];
@@ -75,54 +77,167 @@ void set_bounding_capsule(ModelTool& tool) {
     tool.capsule_count = (hi - lo) > 4.0 * widest ? K : 0;
 }
 
-std::string build_tool(const TriMesh& mesh, ModelTool& tool) {
-    tool.mesh = mesh;
-    tool.topology = build_topology(mesh);
+// One convex piece, appended to the tool's arrays.
+std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
+    ToolPiece piece;
+    piece.vertex_begin = uint32_t(tool.mesh.vertices.size());
+    piece.vertex_count = uint32_t(mesh.vertices.size());
+    piece.triangle_begin = uint32_t(tool.mesh.triangles.size());
+    piece.triangle_count = uint32_t(mesh.triangles.size());
+    piece.face_begin = uint32_t(tool.face_normals.size());
+    piece.edge_begin = uint32_t(tool.edges.size());
+    const std::string name = "piece " + std::to_string(index) + ": ";
+    if (!(mesh_volume(mesh) > 0.0)) return name + "faces point inward (negative volume)";
+    const MeshTopology topo = build_topology(mesh);
     const double tol = 1e-9 * mesh_scale(mesh);
     // Distinct face planes: coplanar triangles share one plane.
+    std::vector<Vec3> normals;
+    std::vector<double> offsets;
     for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-        const Vec3& n = tool.topology.triangle_normals[t];
+        const Vec3& n = topo.triangle_normals[t];
         const double d = glm::dot(n, mesh.vertices[mesh.triangles[t][0]]);
         bool found = false;
-        for (size_t f = 0; f < tool.face_normals.size(); ++f) {
-            if (glm::length(tool.face_normals[f] - n) < 1e-9 && std::abs(tool.face_offsets[f] - d) <= tol) {
+        for (size_t f = 0; f < normals.size(); ++f) {
+            if (glm::length(normals[f] - n) < 1e-9 && std::abs(offsets[f] - d) <= tol) {
                 found = true;
                 break;
             }
         }
         if (!found) {
-            tool.face_normals.push_back(n);
-            tool.face_offsets.push_back(d);
+            normals.push_back(n);
+            offsets.push_back(d);
         }
     }
     // Convexity: every vertex on the inner side of every face plane.
-    for (size_t f = 0; f < tool.face_normals.size(); ++f) {
+    for (size_t f = 0; f < normals.size(); ++f) {
         for (size_t v = 0; v < mesh.vertices.size(); ++v) {
-            const double s = glm::dot(tool.face_normals[f], mesh.vertices[v]) - tool.face_offsets[f];
+            const double s = glm::dot(normals[f], mesh.vertices[v]) - offsets[f];
             if (s > tol)
-                return "tool mesh is not convex: vertex " + std::to_string(v) + " lies " + std::to_string(s) +
+                return name + "not convex: vertex " + std::to_string(v) + " lies " + std::to_string(s) +
                        " m outside face plane " + std::to_string(f);
         }
     }
-    for (size_t f = 0; f < tool.face_normals.size(); ++f) {
-        double lo = tool.face_offsets[f];
-        for (const Vec3& v : mesh.vertices) lo = std::min(lo, glm::dot(tool.face_normals[f], v));
-        tool.face_depths.push_back(tool.face_offsets[f] - lo);
+    for (size_t f = 0; f < normals.size(); ++f) {
+        double lo = offsets[f];
+        for (const Vec3& v : mesh.vertices) lo = std::min(lo, glm::dot(normals[f], v));
+        tool.face_normals.push_back(normals[f]);
+        tool.face_offsets.push_back(offsets[f]);
+        tool.face_depths.push_back(offsets[f] - lo);
     }
-    for (const MeshEdge& e : tool.topology.edges)
+    piece.face_count = uint32_t(normals.size());
+    for (const MeshEdge& e : topo.edges)
         if (e.convexity != Convexity::Flat) {
-            tool.edges.push_back({e.v[0], e.v[1]});
-            tool.edge_normals.push_back({tool.topology.triangle_normals[e.tri[0]], tool.topology.triangle_normals[e.tri[1]]});
+            tool.edges.push_back({e.v[0] + piece.vertex_begin, e.v[1] + piece.vertex_begin});
+            tool.piece_edges.push_back({e.v[0], e.v[1]});
+            tool.edge_normals.push_back({topo.triangle_normals[e.tri[0]], topo.triangle_normals[e.tri[1]]});
         }
-    for (const Vec3& v : mesh.vertices) tool.radius_m = std::max(tool.radius_m, glm::length(v));
-    set_bounding_capsule(tool);
+    piece.edge_count = uint32_t(tool.edges.size()) - piece.edge_begin;
+    for (const Vec3& v : mesh.vertices) {
+        tool.mesh.vertices.push_back(v);
+        tool.vertex_piece.push_back(uint8_t(index));
+        tool.radius_m = std::max(tool.radius_m, glm::length(v));
+    }
+    for (const auto& t : mesh.triangles) {
+        tool.piece_triangles.push_back(t);
+        tool.mesh.triangles.push_back({t[0] + piece.vertex_begin, t[1] + piece.vertex_begin, t[2] + piece.vertex_begin});
+    }
+    set_bounding_capsule(mesh, piece);
+    tool.pieces.push_back(piece);
+    return "";
+}
+
+std::string build_tool(const TriMesh& mesh, ModelTool& tool) {
+    const std::vector<TriMesh> parts = connected_components(mesh);
+    if (parts.size() > size_t(kMaxToolPieces))
+        return "has " + std::to_string(parts.size()) + " pieces (connected components); at most " +
+               std::to_string(kMaxToolPieces);
+    for (size_t i = 0; i < parts.size(); ++i)
+        if (std::string err = add_piece(parts[i], i, tool); !err.empty()) return err;
+    tool.topology = build_topology(tool.mesh);
+    return "";
+}
+
+// Zones of an object: its own material, then each region's over the triangles it selects.
+std::string assign_zones(const SceneObject& so, Model& model, ModelObject& o) {
+    auto add_zone = [&](int scene_material) {
+        model.zone_material.push_back(uint16_t(scene_material + 1));  // 0 is the default material
+        return uint16_t(model.zone_material.size() - 1);
+    };
+    if (model.zone_material.size() + 1 + so.regions.size() > 65535) return "too many material zones (at most 65535)";
+    o.zone = add_zone(so.material);
+    bool compliant = model.materials[model.zone_material[o.zone]].compliant;
+    if (!so.regions.empty()) {
+        o.triangle_zone.assign(o.mesh.triangles.size(), o.zone);
+        for (const MaterialRegion& reg : so.regions) {
+            const uint16_t z = add_zone(reg.material);
+            compliant |= model.materials[model.zone_material[z]].compliant;
+            for (size_t t = 0; t < o.mesh.triangles.size(); ++t) {
+                const auto& tri = o.mesh.triangles[t];
+                const Vec3 c = (o.mesh.vertices[tri[0]] + o.mesh.vertices[tri[1]] + o.mesh.vertices[tri[2]]) / 3.0;
+                if (glm::length(c - reg.center) <= reg.radius_m &&
+                    glm::dot(o.topology.triangle_normals[t], reg.normal) >= reg.min_cos)
+                    o.triangle_zone[t] = z;
+            }
+        }
+        // A vertex takes the zone of its first triangle (in the adjacency's order).
+        o.vertex_zone.assign(o.mesh.vertices.size(), o.zone);
+        for (size_t v = 0; v < o.mesh.vertices.size(); ++v) {
+            const uint32_t a = o.topology.vertex_triangle_offsets[v];
+            if (a < o.topology.vertex_triangle_offsets[v + 1]) o.vertex_zone[v] = o.triangle_zone[o.topology.vertex_triangles[a]];
+        }
+    }
+    o.compliant = compliant;
     return "";
 }
 
 }  // namespace
 
+double material_depth(const ModelMaterial& m, double force_N) {
+    if (!m.compliant || !(force_N > 0.0)) return 0.0;
+    double depth = 0.0;
+    for (int j = 0; j < m.springs; ++j) depth += std::min(force_N / m.stiffness_N_per_m[j], m.cap_m[j]);
+    return depth;
+}
+
+ModelBuild build_model(const SceneFile& scene, RendererSettings settings) {
+    settings.haptic = scene.haptic;
+    return build_model(scene.tool.mesh, scene.objects, settings, scene.materials);
+}
+
+std::string material_from_curve(const ContactMaterial& in, ModelMaterial& out) {
+    out = ModelMaterial{};
+    out.friction_static = in.friction_static;
+    out.friction_kinetic = in.friction_kinetic;
+    out.compliant = in.compliant;
+    if (!in.compliant) return "";
+    const auto& pts = in.yield_curve;
+    if (pts.empty() || pts.size() > size_t(kMaxMaterialSprings)) return "a yield curve needs 1 to 7 points past the origin";
+    // Segment compliances (m/N), never increasing along a stiffening curve.
+    double c[kMaxMaterialSprings];
+    double f0 = 0.0, d0 = 0.0;
+    for (size_t j = 0; j < pts.size(); ++j) {
+        const double df = pts[j][0] - f0, dd = pts[j][1] - d0;
+        if (!(df > 0.0) || !(dd > 0.0) || !std::isfinite(df) || !std::isfinite(dd))
+            return "force and depth must both increase along the yield curve";
+        c[j] = dd / df;
+        if (j > 0 && c[j] > c[j - 1] * (1.0 + 1e-12)) return "the yield curve softens; it must stiffen or stay linear";
+        f0 = pts[j][0];
+        d0 = pts[j][1];
+    }
+    // Spring j carries the compliance the curve loses at point j and bottoms out at its force.
+    const int n = int(pts.size());
+    for (int j = 0; j < n; ++j) {
+        const double cj = j + 1 < n ? c[j] - c[j + 1] : c[j];
+        if (!(cj > 0.0)) continue;  // the curve goes on straight here: no spring
+        out.stiffness_N_per_m[out.springs] = 1.0 / cj;
+        out.cap_m[out.springs] = j + 1 < n ? cj * pts[size_t(j)][0] : std::numeric_limits<double>::infinity();
+        ++out.springs;
+    }
+    return "";
+}
+
 ModelBuild build_model(const TriMesh& tool_mesh, const std::vector<SceneObject>& objects,
-                       const RendererSettings& settings) {
+                       const RendererSettings& settings, const std::vector<ContactMaterial>& materials) {
     ModelBuild out;
     if (std::string err = validate_mesh(tool_mesh); !err.empty()) {
         out.error = "tool: " + err;
@@ -138,6 +253,15 @@ ModelBuild build_model(const TriMesh& tool_mesh, const std::vector<SceneObject>&
         out.error = "too many objects (at most 65535)";
         return out;
     }
+    model->materials.push_back(ModelMaterial{});
+    for (const ContactMaterial& cm : materials) {
+        ModelMaterial m;
+        if (std::string err = material_from_curve(cm, m); !err.empty()) {
+            out.error = "material " + cm.name + ": " + err;
+            return out;
+        }
+        model->materials.push_back(m);
+    }
     for (const SceneObject& so : objects) {
         if (std::string err = validate_mesh(so.mesh); !err.empty()) {
             out.error = so.name + ": " + err;
@@ -150,7 +274,25 @@ ModelBuild build_model(const TriMesh& tool_mesh, const std::vector<SceneObject>&
         for (Vec3& v : o.mesh.vertices) v = so.pose.apply(v);
         o.topology = build_topology(o.mesh);
         o.bvh = Bvh(o.mesh);
+        if (so.material < -1 || so.material >= int(materials.size())) {
+            out.error = so.name + ": material index " + std::to_string(so.material) + " out of range";
+            return out;
+        }
+        for (const MaterialRegion& reg : so.regions)
+            if (reg.material < 0 || reg.material >= int(materials.size())) {
+                out.error = so.name + ": region " + reg.name + ": material index out of range";
+                return out;
+            }
+        if (std::string err = assign_zones(so, *model, o); !err.empty()) {
+            out.error = so.name + ": " + err;
+            return out;
+        }
         model->objects.push_back(std::move(o));
+    }
+    // Only what zones use counts: a material no object takes costs nothing.
+    for (uint16_t m : model->zone_material) {
+        model->any_compliant |= model->materials[m].compliant;
+        model->any_friction |= model->materials[m].friction_static > 0.0;
     }
     out.model = std::move(model);
     return out;

@@ -101,6 +101,16 @@ struct FeatureKey {
     }
 };
 
+// A tool vertex facing a feature of a compliant object: its height over the triangle's plane,
+// whether it is inside (behind the face, over it), and how far the face's normal points along the
+// object's push.
+struct Inside {
+    FeatureKey key;
+    double plane;
+    bool behind;
+    double facing;
+};
+
 struct ObjFeature {
     uint16_t object;
     uint32_t id;
@@ -112,6 +122,29 @@ struct ObjFeature {
 struct Alt {
     int replace;
     Atom atom;
+};
+
+// Slack variables of a candidate: one per spring of every compliant zone its atoms touch, after
+// the six pose variables of the QP.
+inline constexpr int kMaxSlackVars = qp::kMaxVars - qp::kPoseVars;
+
+struct Slacks {
+    int zones = 0;
+    uint16_t zone[kMaxSlackVars] = {};
+    int first[kMaxSlackVars] = {};  // QP variable of the zone's first spring
+    int count[kMaxSlackVars] = {};
+    double depth[kMaxSlackVars] = {};  // how far the zone gives way at the solution (m)
+    int vars = qp::kPoseVars;          // QP variables in use
+};
+
+// Active contacts of a solution as friction needs them: unit normal (world, translation part of
+// the constraint's gradient), normal force and the Coulomb coefficients of their material.
+struct FrictionContacts {
+    int count = 0;
+    Vec3 normal[qp::kMaxVars];
+    double force_N[qp::kMaxVars] = {};
+    double mu_static[qp::kMaxVars] = {};
+    double mu_kinetic[qp::kMaxVars] = {};
 };
 
 struct CandidateResult {
@@ -130,11 +163,13 @@ struct Workspace {
     Vec3 face_n[kMaxToolFaces];
     double face_d[kMaxToolFaces];
     Quat face_q{1.0, 0.0, 0.0, 0.0};  // the rotation face_n was placed with
-    Vec3 capsule[kToolCapsules + 1];   // the tool's bounding capsules at that pose
+    Vec3 capsule[kMaxToolPieces * (kToolCapsules + 1)];  // the pieces' bounding capsules at that pose
     NearTri near[kMaxNear];
     int near_count = 0;
     FeatureKey feats[kMaxFeatures];
     int feat_count = 0;
+    Inside inside[kMaxFeatures];
+    int inside_count = 0;
     ObjFeature overts[kMaxFeatures];
     int overt_count = 0;
     ObjFeature oedges[kMaxFeatures];
@@ -147,6 +182,13 @@ struct Workspace {
     int cand_count = 0;
     Atom best[kMaxAtoms];
     int best_count = 0;
+    // Compliance of the candidate being solved and of the best one: each atom's slack zone
+    // (-1: rigid) and the zones' slacks.
+    int8_t cand_slot[kMaxAtoms];
+    Slacks slacks;
+    int8_t best_slot[kMaxAtoms];
+    Slacks best_slacks;
+    FrictionContacts friction, best_friction;
     qp::Problem problem;
     qp::Solution solution;
     qp::WarmStart warm;
@@ -164,8 +206,8 @@ double energy_of(const HapticSettings& h, const double x[6], const double target
     return 0.5 * e;
 }
 
-ConvexView tool_view(const Model& model, const Vec3* world_vertices, const Workspace& w) {
-    return tool_convex_view(model.tool, world_vertices, w.face_n, w.face_d, &w.face_q, w.capsule);
+ConvexView tool_view(const Model& model, size_t piece, const Vec3* world_vertices, const Workspace& w) {
+    return tool_convex_view(model.tool, piece, world_vertices, w.face_n, w.face_d, &w.face_q, w.capsule);
 }
 
 void set_tool_planes(const Model& model, const Quat& q, const Vec3& p, Workspace& w) {
@@ -232,7 +274,7 @@ double signed_to_plane(const ModelObject& obj, uint32_t tri, const Vec3& p) {
 // (a convex edge or vertex). The face it is most in front of becomes the atom; faces within
 // tie_tol of it become candidates.
 void add_disjunction(const Model& model, Workspace& w, uint16_t object, uint32_t a, const Vec3& wa,
-                     const uint32_t* tris, int count) {
+                     const uint32_t* tris, int count, double back) {
     const ModelObject& obj = model.objects[object];
     int best = -1;
     double best_d = -1e300;
@@ -243,7 +285,7 @@ void add_disjunction(const Model& model, Workspace& w, uint16_t object, uint32_t
             best = i;
         }
     }
-    if (best < 0 || best_d < -kBackFace) return;
+    if (best < 0 || best_d < -back) return;
     const int index = w.atom_count;
     add_atom(w, vf_atom(object, a, tris[best]));
     for (int i = 0; i < count; ++i) {
@@ -287,13 +329,20 @@ bool in_vertex_cone(const ModelObject& obj, uint32_t v, const Vec3& p) {
     return true;
 }
 
-// gather: the principal-contact atoms of every feature pair within `reach`.
-void gather_atoms(const Model& model, double reach, Workspace& w) {
+// gather: the principal-contact atoms of every feature pair within `reach`. The tool may be up to
+// `soft` inside a compliant object: its features stay in play that far behind their surface.
+void gather_atoms(const Model& model, double reach, double soft, const Vec3& push, Workspace& w) {
     const ModelTool& tool = model.tool;
     const int nv = static_cast<int>(tool.mesh.vertices.size());
+    auto back_of = [&](const ModelObject& o) { return o.compliant ? kBackFace + soft : kBackFace; };
+    auto reach_of = [&](const ModelObject& o) { return o.compliant ? reach + soft : reach; };
+    // Whether a constraint normal points within 60 degrees of the push (true without a push).
+    const double push_len = glm::length(push);
+    auto along_push = [&](const Vec3& n) { return !(push_len > 0.0) || glm::dot(n, push) >= 0.5 * push_len; };
     w.atom_count = 0;
     w.alt_count = 0;
     w.feat_count = 0;
+    w.inside_count = 0;
     w.overt_count = 0;
     w.oedge_count = 0;
 
@@ -304,11 +353,12 @@ void gather_atoms(const Model& model, double reach, Workspace& w) {
         const auto& t = obj.mesh.triangles[nt.tri];
         const Vec3 &p0 = obj.mesh.vertices[t[0]], &p1 = obj.mesh.vertices[t[1]], &p2 = obj.mesh.vertices[t[2]];
         const Vec3& n = obj.topology.triangle_normals[nt.tri];
+        const double back = back_of(obj), far = reach_of(obj);
         for (int a = 0; a < nv; ++a) {
             const double plane = glm::dot(n, w.tool_world[a] - p0);
-            if (plane > reach || plane < -kBackFace) continue;
+            if (plane > reach || plane < -back) continue;
             const TriClosest c = closest_on_triangle(w.tool_world[a], p0, p1, p2);
-            if (c.distance > reach) continue;
+            if (c.distance > far) continue;
             FeatureKey key{static_cast<uint32_t>(a), nt.object, 0, nt.tri};
             switch (c.region) {
                 case TriRegion::Face: break;
@@ -319,7 +369,14 @@ void gather_atoms(const Model& model, double reach, Workspace& w) {
                 case TriRegion::Vertex1: key.type = 2; key.id = t[1]; break;
                 case TriRegion::Vertex2: key.type = 2; key.id = t[2]; break;
             }
-            if (w.feat_count < kMaxFeatures) w.feats[w.feat_count++] = key;
+            if (obj.compliant) {
+                // Sorted out below: the tool may be inside a compliant object.
+                if (w.inside_count < kMaxFeatures)
+                    w.inside[w.inside_count++] =
+                        Inside{key, plane, c.region == TriRegion::Face && plane < -kBackFace, glm::dot(n, push)};
+            } else if (w.feat_count < kMaxFeatures) {
+                w.feats[w.feat_count++] = key;
+            }
         }
         for (int k = 0; k < 3; ++k) {
             if (w.overt_count < kMaxFeatures) w.overts[w.overt_count++] = ObjFeature{nt.object, t[k]};
@@ -329,10 +386,53 @@ void gather_atoms(const Model& model, double reach, Workspace& w) {
     }
     std::sort(w.feats, w.feats + w.feat_count);
     w.feat_count = static_cast<int>(std::unique(w.feats, w.feats + w.feat_count) - w.feats);
+    if (w.inside_count > 0) {
+        // Features of compliant objects. A vertex outside the object (behind none of the faces
+        // over it) is held as anywhere else. A vertex inside, where the object gives way, is held
+        // by one face: the one facing the way the object pushes back (the force of the last
+        // tick), so that a face it happens to be near -- the far side of a corner, an inner face
+        // against a neighbouring object -- does not hold it; without a force, the nearest.
+        std::sort(w.inside, w.inside + w.inside_count, [](const Inside& x, const Inside& y) {
+            if (x.key.a != y.key.a) return x.key.a < y.key.a;
+            if (x.key.object != y.key.object) return x.key.object < y.key.object;
+            return x.key < y.key;
+        });
+        const bool pushed = glm::dot(push, push) > 0.0;
+        int i = 0;
+        while (i < w.inside_count) {
+            int j = i;
+            bool inside = false;
+            while (j < w.inside_count && w.inside[j].key.a == w.inside[i].key.a &&
+                   w.inside[j].key.object == w.inside[i].key.object)
+                inside |= w.inside[j++].behind;
+            if (!inside) {
+                for (int k = i; k < j; ++k)
+                    if (w.feat_count < kMaxFeatures) w.feats[w.feat_count++] = w.inside[k].key;
+            } else {
+                int best = -1;
+                for (int k = i; k < j; ++k) {
+                    const Inside& c = w.inside[k];
+                    if (c.key.type != 0 || c.plane > kBackFace) continue;
+                    if (best < 0) {
+                        best = k;
+                        continue;
+                    }
+                    const Inside& b = w.inside[best];
+                    const bool better = pushed && c.facing != b.facing ? c.facing > b.facing : c.plane > b.plane;
+                    if (better) best = k;
+                }
+                if (best >= 0 && w.feat_count < kMaxFeatures) w.feats[w.feat_count++] = w.inside[best].key;
+            }
+            i = j;
+        }
+        std::sort(w.feats, w.feats + w.feat_count);
+        w.feat_count = static_cast<int>(std::unique(w.feats, w.feats + w.feat_count) - w.feats);
+    }
     for (int i = 0; i < w.feat_count; ++i) {
         const FeatureKey& k = w.feats[i];
         const ModelObject& obj = model.objects[k.object];
         const Vec3& wa = w.tool_world[k.a];
+        const double back = back_of(obj);
         if (k.type == 0) {
             add_atom(w, vf_atom(k.object, k.a, k.id));
         } else if (k.type == 1) {
@@ -347,7 +447,7 @@ void gather_atoms(const Model& model, double reach, Workspace& w) {
                 const double s = glm::clamp(glm::dot(wa - v0, ev) / glm::dot(ev, ev), 0.0, 1.0);
                 const Vec3 off = wa - (v0 + s * ev);
                 const double h = signed_to_plane(obj, e.tri[0], wa);
-                if (glm::dot(off, off) - h * h <= 1e-18 && h >= -kBackFace) add_atom(w, vf_atom(k.object, k.a, e.tri[0]));
+                if (glm::dot(off, off) - h * h <= 1e-18 && h >= -back) add_atom(w, vf_atom(k.object, k.a, e.tri[0]));
             } else if (e.convexity == Convexity::Concave) {
                 // eq. 8: both faces of a concave edge hold at once (Types 3 and 5) for a vertex
                 // resting in the valley. A vertex clearly off it is over one of the faces, whose
@@ -358,7 +458,7 @@ void gather_atoms(const Model& model, double reach, Workspace& w) {
                 const double t = glm::clamp(glm::dot(wa - v0, ev) / glm::dot(ev, ev), 0.0, 1.0);
                 if (glm::length(wa - (v0 + t * ev)) > kOffFeature) continue;
                 for (uint32_t tri : e.tri)
-                    if (signed_to_plane(obj, tri, wa) >= -kBackFace) add_atom(w, vf_atom(k.object, k.a, tri));
+                    if (signed_to_plane(obj, tri, wa) >= -back) add_atom(w, vf_atom(k.object, k.a, tri));
             } else {
                 // Convex edge (Types 2, 8): the face the vertex is in front of while it rests on
                 // the edge; the edge's own plane while it is clearly off it.
@@ -368,7 +468,7 @@ void gather_atoms(const Model& model, double reach, Workspace& w) {
                 const Vec3 c = v0 + t * ev;
                 const Vec3 u = wa - c;
                 if (glm::length(u) <= kOffFeature || t <= 0.0 || t >= 1.0) {
-                    add_disjunction(model, w, k.object, k.a, wa, e.tri.data(), 2);
+                    add_disjunction(model, w, k.object, k.a, wa, e.tri.data(), 2, back);
                 } else {
                     // Only in the edge's normal cone (between its faces' normals) is the edge the
                     // nearest feature; elsewhere the point is over a face, which holds it.
@@ -391,7 +491,7 @@ void gather_atoms(const Model& model, double reach, Workspace& w) {
                 // eq. 8: every face around a concave vertex (Type 4), for a vertex resting in it.
                 if (glm::length(wa - obj.mesh.vertices[k.id]) > kOffFeature) continue;
                 for (int j = 0; j < count; ++j)
-                    if (signed_to_plane(obj, tris[j], wa) >= -kBackFace) add_atom(w, vf_atom(k.object, k.a, tris[j]));
+                    if (signed_to_plane(obj, tris[j], wa) >= -back) add_atom(w, vf_atom(k.object, k.a, tris[j]));
             } else if (glm::length(wa - obj.mesh.vertices[k.id]) > kOffFeature) {
                 // Clearly off the vertex, in its Voronoi cone (Type 9): its own plane.
                 int best = 0;
@@ -399,45 +499,51 @@ void gather_atoms(const Model& model, double reach, Workspace& w) {
                     if (signed_to_plane(obj, tris[j], wa) > signed_to_plane(obj, tris[best], wa)) best = j;
                 add_feature_plane(w, k.object, k.a, wa, obj.mesh.vertices[k.id], k.id, tris[best]);
             } else {
-                add_disjunction(model, w, k.object, k.a, wa, tris, count);
+                add_disjunction(model, w, k.object, k.a, wa, tris, count, back);
             }
         }
     }
 
-    // Convex object vertices against tool faces (F-V, Type 11): outside the face most in front.
+    // Convex object vertices against tool faces (F-V, Type 11): outside the face of each piece
+    // most in front.
     std::sort(w.overts, w.overts + w.overt_count);
     w.overt_count = static_cast<int>(std::unique(w.overts, w.overts + w.overt_count) - w.overts);
-    const int nf = static_cast<int>(tool.face_normals.size());
     for (int i = 0; i < w.overt_count; ++i) {
         const ModelObject& obj = model.objects[w.overts[i].object];
         const uint32_t v = w.overts[i].id;
         const Convexity cv = obj.topology.vertex_convexity[v];
         if (cv != Convexity::Convex && cv != Convexity::Mixed) continue;
         const Vec3& p = obj.mesh.vertices[v];
-        int best = -1;
-        double best_s = -1e300;
-        for (int f = 0; f < nf; ++f) {
-            const double s = glm::dot(w.face_n[f], p) - w.face_d[f];
-            if (s > best_s) {
-                best_s = s;
-                best = f;
+        for (const ToolPiece& piece : tool.pieces) {
+            const int f0 = int(piece.face_begin), f1 = int(piece.face_begin + piece.face_count);
+            int best = -1;
+            double best_s = -1e300;
+            for (int f = f0; f < f1; ++f) {
+                const double s = glm::dot(w.face_n[f], p) - w.face_d[f];
+                if (s > best_s) {
+                    best_s = s;
+                    best = f;
+                }
             }
-        }
-        if (best < 0 || best_s > reach || best_s < -kBackFace) continue;
-        Atom at;
-        at.kind = AtomKind::FaceVertex;
-        at.object = w.overts[i].object;
-        at.object_vertex = v;
-        at.tool_face = static_cast<uint32_t>(best);
-        const int index = w.atom_count;
-        add_atom(w, at);
-        for (int f = 0; f < nf; ++f) {
-            if (f == best) continue;
-            const double s = glm::dot(w.face_n[f], p) - w.face_d[f];
-            if (s >= best_s - model.settings.tie_tol_m) {
-                Atom alt = at;
-                alt.tool_face = static_cast<uint32_t>(f);
-                add_alt(w, index, alt);
+            if (best < 0 || best_s > reach || best_s < -back_of(obj)) continue;
+            // Inside a compliant object: only a vertex pressing the way the object pushes back
+            // (the tool face's normal against the push) holds the tool.
+            if (obj.compliant && best_s < -kBackFace && !along_push(-w.face_n[best])) continue;
+            Atom at;
+            at.kind = AtomKind::FaceVertex;
+            at.object = w.overts[i].object;
+            at.object_vertex = v;
+            at.tool_face = static_cast<uint32_t>(best);
+            const int index = w.atom_count;
+            add_atom(w, at);
+            for (int f = f0; f < f1; ++f) {
+                if (f == best) continue;
+                const double s = glm::dot(w.face_n[f], p) - w.face_d[f];
+                if (s >= best_s - model.settings.tie_tol_m) {
+                    Atom alt = at;
+                    alt.tool_face = static_cast<uint32_t>(f);
+                    add_alt(w, index, alt);
+                }
             }
         }
     }
@@ -457,7 +563,7 @@ void gather_atoms(const Model& model, double reach, Workspace& w) {
             const Vec3& a0 = w.tool_world[tool.edges[te][0]];
             const Vec3& a1 = w.tool_world[tool.edges[te][1]];
             const SegmentClosest sc = closest_segments(a0, a1, v0, v1);
-            if (sc.distance > reach) continue;
+            if (sc.distance > reach_of(obj)) continue;
             if (sc.s <= 1e-9 || sc.s >= 1.0 - 1e-9 || sc.t <= 1e-9 || sc.t >= 1.0 - 1e-9) continue;
             const Vec3 et = a1 - a0;
             const Vec3 u = glm::cross(eo, et);
@@ -474,7 +580,11 @@ void gather_atoms(const Model& model, double reach, Workspace& w) {
                 sign = g > 0.0 ? 1.0 : -1.0;
             }
             // The tool edge behind the object edge is across the solid from it: not a contact.
-            if (sign * glm::dot(u / ul, a0 - v0) < -kBackFace) continue;
+            const double behind = sign * glm::dot(u / ul, a0 - v0);
+            if (behind < -back_of(obj)) continue;
+            // Inside a compliant object: only an edge pressed the way the object pushes back
+            // holds the tool (not one that is in by going past the side of a corner).
+            if (obj.compliant && behind < -kBackFace && !along_push(sign * u / ul)) continue;
             Atom at;
             at.kind = AtomKind::EdgeEdge;
             at.object = w.oedges[i].object;
@@ -486,24 +596,26 @@ void gather_atoms(const Model& model, double reach, Workspace& w) {
     }
 }
 
-// The separating plane at the step's start of a triangle that the atoms let the tool reach:
-// atoms that keep every tool vertex (or the triangle's vertices) on its side.
-void add_separating_plane(const Model& model, const NearTri& nt, double reach, Workspace& w) {
+// The separating plane at the step's start of a triangle that the atoms let a piece of the tool
+// reach: atoms that keep every vertex of the piece (or the triangle's vertices) on its side.
+void add_separating_plane(const Model& model, const NearTri& nt, size_t piece, double reach, Workspace& w) {
     const ModelObject& obj = model.objects[nt.object];
     const auto& t = obj.mesh.triangles[nt.tri];
     const Vec3 p[3] = {obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]};
-    const ConvexView view = tool_view(model, w.tool_world, w);
+    const ConvexView view = tool_view(model, piece, w.tool_world, w);
+    const ToolPiece& tp = model.tool.pieces[piece];
     const SatResult sat = separate_convex_triangle(view, p[0], p[1], p[2]);
     const int nv = view.vertex_count;
     if (sat.kind == 1) {
+        const int face = int(tp.face_begin) + sat.index;
         for (int k = 0; k < 3; ++k) {
-            const double s = glm::dot(w.face_n[sat.index], p[k]) - w.face_d[sat.index];
+            const double s = glm::dot(w.face_n[face], p[k]) - w.face_d[face];
             if (s > sat.separation + reach) continue;
             Atom at;
             at.kind = AtomKind::FaceVertex;
             at.object = nt.object;
             at.object_vertex = t[k];
-            at.tool_face = static_cast<uint32_t>(sat.index);
+            at.tool_face = static_cast<uint32_t>(face);
             if (w.cand_count < kMaxAtoms) w.cand[w.cand_count++] = at;
         }
         return;
@@ -515,13 +627,13 @@ void add_separating_plane(const Model& model, const NearTri& nt, double reach, W
         if (glm::dot(sat.axis, p[k]) > glm::dot(sat.axis, p[vk])) vk = k;
     const double top = glm::dot(sat.axis, p[vk]);
     for (int a = 0; a < nv; ++a) {
-        if (glm::dot(sat.axis, w.tool_world[a]) - top > sat.separation + reach) continue;
+        if (glm::dot(sat.axis, view.vertices[a]) - top > sat.separation + reach) continue;
         Atom at;
         at.kind = AtomKind::FixedAxis;
         at.object = nt.object;
         at.object_triangle = nt.tri;
         at.object_vertex = t[vk];
-        at.tool_vertex = static_cast<uint32_t>(a);
+        at.tool_vertex = tp.vertex_begin + static_cast<uint32_t>(a);
         at.axis = sat.axis;
         if (w.cand_count < kMaxAtoms) w.cand[w.cand_count++] = at;
     }
@@ -628,6 +740,94 @@ bool inside_box(const double x[6], const double lower[6], const double upper[6])
     return true;
 }
 
+// The contact zone of an atom's object feature.
+uint16_t atom_zone(const Model& model, const Atom& a) {
+    const ModelObject& o = model.objects[a.object];
+    if (o.triangle_zone.empty()) return o.zone;
+    switch (a.kind) {
+        case AtomKind::VertexFace:
+        case AtomKind::FixedAxis: return o.triangle_zone[a.object_triangle];
+        case AtomKind::FaceVertex: return o.vertex_zone[a.object_vertex];
+        case AtomKind::EdgeEdge: return o.triangle_zone[o.topology.edges[a.object_edge].tri[0]];
+    }
+    return o.zone;
+}
+
+const ModelMaterial& zone_material(const Model& model, uint16_t zone) {
+    return model.materials[model.zone_material[zone]];
+}
+
+// Slack variables for the compliant zones of the candidate's atoms, in the order the atoms meet
+// them. A zone whose springs no longer fit holds rigidly (never deeper than its surface).
+void assign_slacks(const Model& model, Workspace& w) {
+    Slacks& sl = w.slacks;
+    sl.zones = 0;
+    sl.vars = qp::kPoseVars;
+    for (int i = 0; i < w.cand_count; ++i) {
+        w.cand_slot[i] = -1;
+        if (!model.any_compliant || !model.objects[w.cand[i].object].compliant) continue;
+        const uint16_t z = atom_zone(model, w.cand[i]);
+        const ModelMaterial& m = zone_material(model, z);
+        if (!m.compliant) continue;
+        int slot = -1;
+        for (int k = 0; k < sl.zones; ++k)
+            if (sl.zone[k] == z) slot = k;
+        if (slot < 0) {
+            if (sl.vars + m.springs > qp::kMaxVars) continue;
+            slot = sl.zones++;
+            sl.zone[slot] = z;
+            sl.first[slot] = sl.vars;
+            sl.count[slot] = m.springs;
+            sl.depth[slot] = 0.0;
+            sl.vars += m.springs;
+        }
+        w.cand_slot[i] = int8_t(slot);
+    }
+}
+
+// How far the zone of slot `slot` gives way at the slack values `x` (m).
+double slot_depth(const Slacks& sl, int slot, const double* x) {
+    if (slot < 0) return 0.0;
+    double d = 0.0;
+    for (int v = sl.first[slot]; v < sl.first[slot] + sl.count[slot]; ++v) d += x[v];
+    return d;
+}
+
+// Depth of a zone in a solution, 0 when it has no slack there.
+double zone_depth(const Slacks& sl, uint16_t zone) {
+    for (int k = 0; k < sl.zones; ++k)
+        if (sl.zone[k] == zone) return sl.depth[k];
+    return 0.0;
+}
+
+double triangle_zone_depth(const Model& model, const Slacks& sl, const NearTri& nt) {
+    const ModelObject& o = model.objects[nt.object];
+    if (!o.compliant || sl.zones == 0) return 0.0;
+    return zone_depth(sl, o.triangle_zone.empty() ? o.zone : o.triangle_zone[nt.tri]);
+}
+
+// The active contacts of a solution for friction: the rows the QP holds, their normal forces
+// from its multipliers (W (x - t) = sum lambda a, and the force of eq. 4 is K_t / w_t times the
+// translational part) and their materials.
+void record_friction(const Model& model, const ToolPoseAt& at, int rows, Workspace& w) {
+    FrictionContacts& f = w.friction;
+    f.count = 0;
+    const HapticSettings& h = model.settings.haptic;
+    const double to_force = h.stiffness_N_per_m / h.weight_translational;
+    for (int k = 0; k < w.solution.active_count; ++k) {
+        const int row = w.solution.active[k];
+        if (row < 0 || row >= rows || !(w.solution.multipliers[k] > 0.0)) continue;
+        double grad[6];
+        evaluate_atom(model, w.cand[row], at, grad);
+        const ModelMaterial& m = zone_material(model, atom_zone(model, w.cand[row]));
+        f.normal[f.count] = Vec3(grad[0], grad[1], grad[2]);
+        f.force_N[f.count] = to_force * w.solution.multipliers[k];
+        f.mu_static[f.count] = m.friction_static;
+        f.mu_kinetic[f.count] = m.friction_kinetic;
+        ++f.count;
+    }
+}
+
 // solve: one candidate set by sequential linearization (re-linearize until exact).
 CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3& frame, const double target[6],
                                 const double target_local[6], const double lower[6], const double upper[6],
@@ -643,19 +843,43 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         P.lower[j] = lower[j];
         P.upper[j] = upper[j];
     }
-    double x[6] = {0, 0, 0, 0, 0, 0};
+    // A spring's energy 1/2 k s^2 on the scale of eq. 3, where the translational spring of eq. 4
+    // (K_t) weighs w_t: so that at the solution the zone gives way by exactly force / k.
+    const double spring_scale = h.weight_translational / h.stiffness_N_per_m;
+    auto set_slack_vars = [&]() {
+        assign_slacks(model, w);
+        const Slacks& sl = w.slacks;
+        P.vars = sl.vars;
+        for (int k = 0; k < sl.zones; ++k) {
+            const ModelMaterial& m = zone_material(model, sl.zone[k]);
+            for (int j = 0; j < sl.count[k]; ++j) {
+                const int v = sl.first[k] + j;
+                P.weight[v] = m.stiffness_N_per_m[j] * spring_scale;
+                P.target[v] = 0.0;
+                P.lower[v] = 0.0;
+                P.upper[v] = m.cap_m[j];
+            }
+        }
+    };
+    set_slack_vars();
+    double x[qp::kMaxVars] = {};
     // Warm start: the rows of the contacts active at the last tick go into the working set first.
     w.warm.count = 0;
-    for (int i = 0; i < w.cand_count && i < qp::kMaxRows && w.warm.count < qp::kVars; ++i)
+    for (int i = 0; i < w.cand_count && i < qp::kMaxRows && w.warm.count < qp::kPoseVars; ++i)
         for (int k = 0; k < previous_count; ++k)
             if (w.cand[i].same_as(previous[k])) {
                 w.warm.active[w.warm.count++] = i;
                 break;
             }
+    // The exact value of atom i with its zone's give: >= 0 when it holds.
+    auto value = [&](int i, const ToolPoseAt& at) {
+        return evaluate_atom(model, w.cand[i], at, nullptr) + slot_depth(w.slacks, w.cand_slot[i], x);
+    };
     int guard_rounds = 0;
     for (int it = 0; it < S.max_relinearizations; ++it) {
         const ToolPoseAt at = tool_pose_at(base, x);
         const int rows = std::min(w.cand_count, qp::kMaxRows);
+        const int vars = w.slacks.vars;
         P.rows = rows;
         for (int i = 0; i < rows; ++i) {
             double grad[6];
@@ -665,68 +889,83 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             // The QP works in the frame of the last graphic pose (x = F y, F = diag(R0, R0)):
             // grad . x = (F^T grad) . y.
             to_frame(frame, grad, P.a[i]);
-            // g(x_k) + grad . (x - x_k) >= 0
+            // g(x_k) + grad . (x - x_k) + (the zone's springs) >= 0
             P.b[i] = gx - g;
+            if (vars > qp::kPoseVars) {
+                const int slot = w.cand_slot[i];
+                for (int v = qp::kPoseVars; v < vars; ++v) P.a[i][v] = 0.0;
+                if (slot >= 0)
+                    for (int v = w.slacks.first[slot]; v < w.slacks.first[slot] + w.slacks.count[slot]; ++v) P.a[i][v] = 1.0;
+            }
         }
         const qp::Status st = qp::solve(P, S.qp, w.warm.count ? &w.warm : nullptr, w.solution);
         ++stats.qp_solves;
         stats.qp_iterations += w.solution.iterations;
         r.relinearizations = it + 1;
         if (st != qp::Status::Optimal) return r;
-        w.warm.count = w.solution.active_count;
-        for (int k = 0; k < w.solution.active_count; ++k) w.warm.active[k] = w.solution.active[k];
+        w.warm.count = std::min(w.solution.active_count, qp::kVars);
+        for (int k = 0; k < w.warm.count; ++k) w.warm.active[k] = w.solution.active[k];
         if (w.solution.active_count == 0) {
             // Nothing holds the tool: exactly the target (no rounding through the frame).
             for (int j = 0; j < 6; ++j) x[j] = target[j];
+            for (int v = qp::kPoseVars; v < vars; ++v) x[v] = 0.0;
         } else {
             from_frame(frame, w.solution.x, x);
+            for (int v = qp::kPoseVars; v < vars; ++v) x[v] = std::max(0.0, w.solution.x[v]);
         }
 
         // The exact constraint error at the new pose: no atom violated, and the atoms the QP
         // holds active really touch (no gap left by the linearization).
         const ToolPoseAt nx = tool_pose_at(base, x);
         double worst = 0.0;
-        for (int i = 0; i < w.cand_count; ++i) {
-            const double g = evaluate_atom(model, w.cand[i], nx, nullptr);
-            worst = std::max(worst, -g);
-        }
+        for (int i = 0; i < w.cand_count; ++i) worst = std::max(worst, -value(i, nx));
         for (int k = 0; k < w.solution.active_count; ++k) {
             const int row = w.solution.active[k];
             if (row < 0 || row >= rows) continue;  // box bounds
-            worst = std::max(worst, evaluate_atom(model, w.cand[row], nx, nullptr));
+            worst = std::max(worst, value(row, nx));
         }
         if (worst > S.constraint_tol_m) continue;
+        for (int k = 0; k < w.slacks.zones; ++k) w.slacks.depth[k] = slot_depth(w.slacks, k, x);
 
-        // Guard: every triangle in reach must be separated from the tool at the new pose.
-        // Planes at the new pose for the check, then restored to the start pose.
+        // Guard: every triangle in reach must be separated from the tool at the new pose (a
+        // compliant one: by no more than its zone gives way). Planes at the new pose for the
+        // check, then restored to the start pose.
         place_tool_vertices(model.tool, nx.q, nx.p, w.tool_moved);
         set_tool_planes(model, nx.q, nx.p, w);
-        const ConvexView moved = tool_view(model, w.tool_moved, w);
         int missed = 0;
         NearTri missed_tris[8];
-        for (int i = 0; i < w.near_count && missed < 8; ++i) {
-            const ModelObject& obj = model.objects[w.near[i].object];
-            const auto& t = obj.mesh.triangles[w.near[i].tri];
-            if (capsule_lower_bound(moved, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]) >
-                0.0)
-                continue;  // clear of the tool's bounding capsule
-            const SatResult s = separate_convex_triangle(moved, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
-                                                         obj.mesh.vertices[t[2]]);
-            if (s.separation < -S.constraint_tol_m) missed_tris[missed++] = w.near[i];
+        uint8_t missed_piece[8];
+        for (size_t k = 0; k < model.tool.pieces.size() && missed < 8; ++k) {
+            const ConvexView moved = tool_view(model, k, w.tool_moved, w);
+            for (int i = 0; i < w.near_count && missed < 8; ++i) {
+                const ModelObject& obj = model.objects[w.near[i].object];
+                const auto& t = obj.mesh.triangles[w.near[i].tri];
+                const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
+                if (capsule_lower_bound(moved, t0, t1, t2) > 0.0) continue;  // clear of the piece's capsules
+                const SatResult sat = separate_convex_triangle(moved, t0, t1, t2);
+                const double give = triangle_zone_depth(model, w.slacks, w.near[i]);
+                if (sat.separation < -(S.constraint_tol_m + give)) {
+                    missed_piece[missed] = uint8_t(k);
+                    missed_tris[missed++] = w.near[i];
+                }
+            }
         }
         set_tool_planes(model, base.orientation, base.position, w);
         if (missed == 0) {
             r.ok = true;
             for (int j = 0; j < 6; ++j) r.x[j] = x[j];
             r.energy = energy_of(h, x, target);
+            for (int v = qp::kPoseVars; v < vars; ++v) r.energy += 0.5 * P.weight[v] * x[v] * x[v];
             r.error = worst;
             r.atom_count = w.cand_count;
+            if (model.any_friction) record_friction(model, nx, rows, w);
             return r;
         }
         if (++guard_rounds > 4) return r;
-        for (int m = 0; m < missed; ++m) add_separating_plane(model, missed_tris[m], reach, w);
+        for (int m = 0; m < missed; ++m) add_separating_plane(model, missed_tris[m], missed_piece[m], reach, w);
+        set_slack_vars();
         // Start again from the step's start with the added planes.
-        for (int j = 0; j < 6; ++j) x[j] = 0.0;
+        for (double& v : x) v = 0.0;
         w.warm.count = 0;
     }
     return r;
@@ -777,6 +1016,9 @@ bool solve_candidates(const Model& model, const Pose& base, const Mat3& frame, c
             stats.constraint_error_m = cr.error;
             w.best_count = w.cand_count;
             std::copy(w.cand, w.cand + w.cand_count, w.best);
+            std::copy(w.cand_slot, w.cand_slot + w.cand_count, w.best_slot);
+            w.best_slacks = w.slacks;
+            if (model.any_friction) w.best_friction = w.friction;
         }
     }
     if (found) stats.atoms = w.best_count;
@@ -784,20 +1026,31 @@ bool solve_candidates(const Model& model, const Pose& base, const Mat3& frame, c
 }
 
 // Whether world point m lies on the contact: on the tool's surface and on an object's surface,
-// both within `tol`.
-bool on_contact(const Model& model, const Workspace& w, const Vec3& m, double tol) {
-    double inside = -1e300;
-    for (size_t f = 0; f < model.tool.face_normals.size(); ++f)
-        inside = std::max(inside, glm::dot(w.face_n[f], m) - w.face_d[f]);
-    if (std::abs(inside) > tol) return false;
-    Aabb box;
-    box.grow(m);
-    box.inflate(tol);
+// both within `tol` (a compliant object's surface within tol + give: the tool is that far in).
+bool on_contact(const Model& model, const Workspace& w, const Vec3& m, double tol, double give) {
+    // On the surface of some piece (inside the others or not: a point of the union's surface lies
+    // on one piece's surface).
+    bool on_tool = false;
+    for (const ToolPiece& piece : model.tool.pieces) {
+        double inside = -1e300;
+        for (uint32_t f = piece.face_begin; f < piece.face_begin + piece.face_count; ++f)
+            inside = std::max(inside, glm::dot(w.face_n[f], m) - w.face_d[f]);
+        if (std::abs(inside) <= tol) {
+            on_tool = true;
+            break;
+        }
+    }
+    if (!on_tool) return false;
     bool hit = false;
     for (const ModelObject& o : model.objects) {
+        const double within = o.compliant ? tol + give : tol;
+        Aabb box;
+        box.grow(m);
+        box.inflate(within);
         o.bvh.query(box, [&](uint32_t tri) {
             const auto& t = o.mesh.triangles[tri];
-            if (closest_on_triangle(m, o.mesh.vertices[t[0]], o.mesh.vertices[t[1]], o.mesh.vertices[t[2]]).distance <= tol)
+            if (closest_on_triangle(m, o.mesh.vertices[t[0]], o.mesh.vertices[t[1]], o.mesh.vertices[t[2]]).distance <=
+                within)
                 hit = true;
             return !hit;
         });
@@ -810,7 +1063,7 @@ bool on_contact(const Model& model, const Workspace& w, const Vec3& m, double to
 // is itself on the contact (a face lying on a face is one region; a tip on a floor and a shaft on
 // an edge are two). Needs the tool planes of the solution pose in the workspace.
 int count_regions(const Model& model, const Workspace& w, const Atom* atoms, int count, const ToolPoseAt& at,
-                  double tol) {
+                  double tol, double give) {
     constexpr int kMax = kMaxActiveAtoms;
     Vec3 point[kMax];
     int parent[kMax];
@@ -827,13 +1080,19 @@ int count_regions(const Model& model, const Workspace& w, const Atom* atoms, int
         for (int j = i + 1; j < n; ++j) {
             if (find(i) == find(j)) continue;
             const Vec3 m = 0.5 * (point[i] + point[j]);
-            if (glm::length(point[i] - point[j]) <= tol || on_contact(model, w, m, tol)) parent[find(i)] = find(j);
+            if (glm::length(point[i] - point[j]) <= tol || on_contact(model, w, m, tol, give)) parent[find(i)] = find(j);
         }
     }
     int regions = 0;
     for (int i = 0; i < n; ++i)
         if (find(i) == i) ++regions;
     return regions;
+}
+
+// How far the zone of the chosen candidate's atom i gives way (m).
+double best_give(const Workspace& w, int i) {
+    const int slot = w.best_slot[i];
+    return slot < 0 ? 0.0 : w.best_slacks.depth[slot];
 }
 
 // The contacts of the chosen atom set at x: an atom within 2 tolerances of zero is touching; it
@@ -854,7 +1113,8 @@ ContactCheck check_contacts(const Model& model, const Pose& base, const double x
     bool touching = false;
     for (int i = 0; i < w.best_count; ++i) {
         const Atom& a = w.best[i];
-        if (evaluate_atom(model, a, at, nullptr) > 2.0 * tol) continue;
+        const double give = best_give(w, i);
+        if (evaluate_atom(model, a, at, nullptr) + give > 2.0 * tol) continue;
         touching = true;
         const ModelObject& o = model.objects[a.object];
         double d = 0.0;
@@ -874,11 +1134,75 @@ ContactCheck check_contacts(const Model& model, const Pose& base, const double x
             d = closest_segments(at.p + at.R * tool.mesh.vertices[te[0]], at.p + at.R * tool.mesh.vertices[te[1]],
                                  o.mesh.vertices[e.v[0]], o.mesh.vertices[e.v[1]]).distance;
         }
-        if (d > 10.0 * tol) c.any_virtual = true;
+        // In a compliant zone the tool is `give` inside the surface it touches.
+        if (std::abs(d - give) > 10.0 * tol) c.any_virtual = true;
         else c.real = true;
     }
     c.virtual_only = touching && !c.real;
     return c;
+}
+
+// Coulomb friction on the chosen solution, inside the same optimization: the contacts' normals
+// and normal forces (from the QP's multipliers) give the tangent space and the limits
+// mu_s N and mu_k N of the tangential force. The graphic tool sticks where it was at the last
+// tick while holding it there takes at most the static limit, and slides otherwise, holding the
+// tangential force at the kinetic limit; once sliding it slides while the kinetic limit is
+// exceeded, so the switch does not chatter. The chosen target's tangential part is moved
+// accordingly and the candidate solved again (exact constraints, guard and force-continuity box
+// as every solve), so friction never lets the tool into an object. The friction of turning is
+// left out. Returns false when nothing changed.
+bool apply_friction(const Model& model, const State& state, const Pose& base, const Pose& haptic, const Mat3& frame,
+                    const Vec3 motion_local[4], double reach, double x_sol[6], Workspace& w, StepStats& stats) {
+    const FrictionContacts f = w.best_friction;
+    double normal = 0.0, limit_s = 0.0, limit_k = 0.0;
+    Vec3 e[3];
+    int rank = 0;
+    for (int k = 0; k < f.count; ++k) {
+        normal += f.force_N[k];
+        limit_s += f.mu_static[k] * f.force_N[k];
+        limit_k += f.mu_kinetic[k] * f.force_N[k];
+        Vec3 v = f.normal[k];
+        for (int i = 0; i < rank; ++i) v -= glm::dot(v, e[i]) * e[i];
+        const double len = glm::length(v);
+        if (len > 1e-6 && rank < 3) e[rank++] = v / len;
+    }
+    stats.normal_force_N = normal;
+    stats.friction_static_limit_N = limit_s;
+    stats.friction_kinetic_limit_N = limit_k;
+    if (!(limit_s > 0.0) || rank >= 3) return false;  // no friction, or no way to slide
+    auto tangential = [&](Vec3 v) {
+        for (int i = 0; i < rank; ++i) v -= glm::dot(v, e[i]) * e[i];
+        return v;
+    };
+    const double K = model.settings.haptic.stiffness_N_per_m;
+    // The graphic tool's tangential offset from the haptic tool if it stays where it was.
+    const Vec3 hold = tangential(state.graphic.position - haptic.position);
+    const double pull_N = K * glm::length(hold);
+    const bool slide = state.sliding ? pull_N > limit_k * (1.0 + 1e-9) : pull_N > limit_s;
+    stats.sliding = slide;
+    const Vec3 offset = slide ? hold * (limit_k / pull_N) : hold;
+
+    double target[6], target_local[6], lower[6], upper[6];
+    const Vec3 dp = haptic.position + offset - base.position;
+    const Vec3 dt = quat_log(haptic.orientation * glm::conjugate(base.orientation));
+    target[0] = dp.x; target[1] = dp.y; target[2] = dp.z;
+    target[3] = dt.x; target[4] = dt.y; target[5] = dt.z;
+    to_frame(frame, target, target_local);
+    const double radius = std::max(model.tool.radius_m, 1e-6);
+    local_box(model.settings, radius, target_local, motion_local[0], motion_local[1], motion_local[2],
+              motion_local[3], true, 0.0, lower, upper);
+    w.cand_count = w.best_count;
+    std::copy(w.best, w.best + w.best_count, w.cand);
+    const CandidateResult cr = solve_candidate(model, base, frame, target, target_local, lower, upper, reach,
+                                               state.active, state.active_count, w, stats);
+    ++stats.candidates;
+    if (!cr.ok) return false;
+    for (int j = 0; j < 6; ++j) x_sol[j] = cr.x[j];
+    w.best_count = w.cand_count;
+    std::copy(w.cand, w.cand + w.cand_count, w.best);
+    std::copy(w.cand_slot, w.cand_slot + w.cand_count, w.best_slot);
+    w.best_slacks = w.slacks;
+    return true;
 }
 
 }  // namespace
@@ -914,6 +1238,8 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     const Vec3 haptic_rotation = quat_log(haptic.orientation * glm::conjugate(state.last_haptic.orientation));
     const double radius = std::max(model.tool.radius_m, 1e-6);
     Pose base = state.graphic;
+    // The way the objects pushed the tool at the last tick (eq. 4's force direction).
+    const Vec3 push = state.graphic.position - state.last_haptic.position;
     Vec3 moved(0.0);   // translation of earlier passes of this tick
     Vec3 turned(0.0);  // their rotation (sum of rotation vectors: a first-order account)
 
@@ -1003,7 +1329,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             stage_detect += micros(t0, t_detect_end);
 
             // ---- gather ----
-            gather_atoms(model, reach, w);
+            gather_atoms(model, reach, model.any_compliant ? state.soft_depth_m + reach : 0.0, push, w);
             t_gather_end = Clock::now();
             stage_gather += micros(t_detect_end, t_gather_end);
             res.stats.atoms_gathered = w.atom_count;
@@ -1034,7 +1360,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                     scale *= 0.5;
                     continue;
                 }
-                gather_atoms(model, reach, w);
+                gather_atoms(model, reach, model.any_compliant ? state.soft_depth_m + reach : 0.0, push, w);
                 solved = false;
                 for (int round = 0; round < 2 && !solved; ++round) {
                     const double recover = round == 0 ? 0.0 : 10.0 * S.constraint_tol_m;
@@ -1061,6 +1387,16 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
         solved = false;
         base = state.graphic;
     }
+    bool sliding = false;
+    if (solved && !free_motion && model.any_friction && scale == 1.0) {
+        const auto t0 = Clock::now();
+        const Mat3 frame = S.local_box == LocalBox::Paper ? Mat3(1.0) : glm::mat3_cast(state.graphic.orientation);
+        const Vec3 motion_local[4] = {glm::transpose(frame) * haptic_motion, glm::transpose(frame) * haptic_rotation,
+                                      glm::transpose(frame) * moved, glm::transpose(frame) * turned};
+        apply_friction(model, state, base, haptic, frame, motion_local, reach, x_sol, w, res.stats);
+        sliding = res.stats.sliding;
+        stage_solve += micros(t0, Clock::now());
+    }
 
     const auto t_select = Clock::now();
     Pose graphic = base;
@@ -1082,7 +1418,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             // The active contacts: atoms touching at the solution.
             const ToolPoseAt at = tool_pose_at(base, x_sol);
             for (int i = 0; i < w.best_count; ++i) {
-                const double g = evaluate_atom(model, w.best[i], at, nullptr);
+                const double g = evaluate_atom(model, w.best[i], at, nullptr) + best_give(w, i);
                 if (g <= S.contact_distance_m) {
                     const Atom& a = w.best[i];
                     if (a.kind == AtomKind::VertexFace) ++res.stats.active_vf;
@@ -1093,7 +1429,11 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             }
             res.contacts = res.stats.active_vf + res.stats.active_fv + res.stats.active_ee;
             set_tool_planes(model, graphic.orientation, graphic.position, w);
-            res.stats.regions = count_regions(model, w, state.active, state.active_count, at, S.contact_distance_m);
+            double give = 0.0;
+            for (int k = 0; k < w.best_slacks.zones; ++k) give = std::max(give, w.best_slacks.depth[k]);
+            res.stats.soft_zones = w.best_slacks.zones;
+            res.stats.soft_depth_m = give;
+            res.stats.regions = count_regions(model, w, state.active, state.active_count, at, S.contact_distance_m, give);
             bool at_target = whole;
             for (int j = 0; j < 6 && at_target; ++j) at_target = x_sol[j] == xh[j];
             if (res.contacts == 0 && at_target) graphic = haptic;
@@ -1104,6 +1444,9 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     const auto t_force = Clock::now();
     state.graphic = graphic;
     state.last_haptic = haptic;
+    // A held tick keeps the last pose, and with it how deep it is in a compliant zone.
+    if (solved) state.soft_depth_m = res.contacts > 0 ? res.stats.soft_depth_m : 0.0;
+    state.sliding = res.contacts > 0 && sliding;
     res.graphic = graphic;
 
     // ---- force ---- eq. 4

@@ -49,14 +49,21 @@ RunResult run_scene(const SceneFile& scene, const RendererSettings& settings_in)
         run.error = scene.trajectory_path + ": needs at least two rows";
         return run;
     }
-    ModelBuild mb = build_model(scene.tool.mesh, scene.objects, settings);
+    ModelBuild mb = build_model(scene.tool.mesh, scene.objects, settings, scene.materials);
     if (!mb.model) {
         run.error = scene.path + ": " + mb.error;
         return run;
     }
     const Model& model = *mb.model;
-    std::vector<PlacedMesh> placed;
-    for (const SceneObject& o : scene.objects) placed.push_back(PlacedMesh{&o.mesh, o.pose});
+    // The tool must never enter a rigid object; a compliant one it enters by design, and how far
+    // is measured apart.
+    std::vector<PlacedMesh> placed, rigid, compliant;
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+        const SceneObject& o = scene.objects[i];
+        placed.push_back(PlacedMesh{&o.mesh, o.pose});
+        (model.objects[i].compliant ? compliant : rigid).push_back(placed.back());
+    }
+    const std::vector<TriMesh> pieces = connected_components(scene.tool.mesh);
 
     const double t0 = scene.trajectory.front().t;
     const double t1 = scene.trajectory.back().t;
@@ -64,7 +71,7 @@ RunResult run_scene(const SceneFile& scene, const RendererSettings& settings_in)
     size_t cursor = 0;
     const Pose start = sample_trajectory(scene.trajectory, t0, cursor);
     {
-        const ExactCheck c = exact_check(scene.tool.mesh, start, placed, 0.0);
+        const ExactCheck c = exact_check(pieces, start, placed, 0.0);
         if (c.penetration_m > settings.constraint_tol_m) {
             run.error = scene.trajectory_path + ": line 2: the first pose penetrates an object by " +
                         std::to_string(c.penetration_m) + " m";
@@ -97,9 +104,17 @@ RunResult run_scene(const SceneFile& scene, const RendererSettings& settings_in)
         r.contacts = out.contacts;
         r.stats = out.stats;
         const bool has_force = glm::length(out.force_N) > 0.0 || glm::length(out.torque_Nm) > 0.0;
-        const ExactCheck c = exact_check(scene.tool.mesh, out.graphic, placed, has_force ? kGapLimit : 0.0);
+        const ExactCheck c = exact_check(pieces, out.graphic, rigid, has_force ? kGapLimit : 0.0);
         r.penetration_m = c.penetration_m;
         r.gap_m = has_force ? c.distance_m : 0.0;
+        if (!compliant.empty()) {
+            const ExactCheck soft = exact_check(pieces, out.graphic, compliant, has_force ? kGapLimit : 0.0);
+            r.soft_depth_m = soft.penetration_m;
+            if (has_force) r.gap_m = std::min(r.gap_m, soft.distance_m);
+            s.max_soft_depth_m = std::max(s.max_soft_depth_m, r.soft_depth_m);
+        }
+        s.max_friction_limit_N = std::max(s.max_friction_limit_N, out.stats.friction_static_limit_N);
+        if (out.stats.sliding) ++s.sliding_steps;
 
         ++s.steps;
         if (out.contacts > 0) ++s.contact_steps;
@@ -190,6 +205,8 @@ bool write_run(const RunResult& run, const std::string& dir, std::string* error)
     j["steps"] = s.steps;
     j["contact_steps"] = s.contact_steps;
     j["max_penetration_m"] = s.max_penetration_m;
+    j["max_soft_depth_m"] = s.max_soft_depth_m;
+    j["sliding_steps"] = s.sliding_steps;
     j["max_gap_in_contact_m"] = s.max_gap_in_contact_m;
     j["max_force_N"] = s.max_force_N;
     j["max_torque_Nm"] = s.max_torque_Nm;

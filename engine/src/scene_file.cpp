@@ -110,6 +110,186 @@ bool check_file(const Reporter& r, const std::string& place, const std::string& 
     return true;
 }
 
+// Limits of the materials section.
+constexpr size_t kMaxMaterials = 1024;
+constexpr size_t kMaxCurvePoints = 8;
+constexpr size_t kMaxRegions = 4096;
+
+int material_index(const std::vector<ContactMaterial>& materials, const std::string& name) {
+    for (size_t i = 0; i < materials.size(); ++i)
+        if (materials[i].name == name) return int(i);
+    return -1;
+}
+
+// "materials": {"name": {"kind": "rigid"|"compliant", "stiffness_N_per_m" | "yield_curve_N_mm",
+// "friction_static", "friction_kinetic"}}.
+void read_materials(const Reporter& r, const json& v, std::vector<ContactMaterial>& out) {
+    const std::string place = "/materials";
+    if (!v.is_object()) {
+        r.error(place, "expected an object mapping material names to materials");
+        return;
+    }
+    if (v.size() > kMaxMaterials) {
+        r.error(place, "has " + std::to_string(v.size()) + " materials (at most " + std::to_string(kMaxMaterials) + ")");
+        return;
+    }
+    for (auto it = v.begin(); it != v.end(); ++it) {
+        const std::string here = place + "/" + pointer_token(it.key());
+        const json& m = *it;
+        ContactMaterial mat;
+        mat.name = it.key();
+        if (!m.is_object()) {
+            r.error(here, "expected an object");
+            continue;
+        }
+        warn_unknown_keys(r, m, here, {"kind", "stiffness_N_per_m", "yield_curve_N_mm", "friction_static",
+                                       "friction_kinetic"});
+        std::string kind;
+        if (read_string(r, m, here, "kind", kind)) {
+            if (kind == "compliant")
+                mat.compliant = true;
+            else if (kind != "rigid")
+                r.error(here + "/kind", "expected \"rigid\" or \"compliant\", found " + shown(kind));
+        }
+        const auto stiff = m.find("stiffness_N_per_m");
+        const auto curve = m.find("yield_curve_N_mm");
+        if (!mat.compliant && (stiff != m.end() || curve != m.end())) {
+            r.error(here, "a rigid material takes no stiffness or yield curve");
+        } else if (mat.compliant && (stiff == m.end()) == (curve == m.end())) {
+            r.error(here, "a compliant material needs exactly one of \"stiffness_N_per_m\" and \"yield_curve_N_mm\"");
+        } else if (stiff != m.end()) {
+            double k = 0.0;
+            if (!finite_number(*stiff, k) || !(k > 0.0))
+                r.error(here + "/stiffness_N_per_m", "expected a positive finite number, found " + shown(stiff->dump()));
+            else
+                mat.yield_curve.push_back({1.0, 1.0 / k});
+        } else if (curve != m.end()) {
+            const std::string cp = here + "/yield_curve_N_mm";
+            if (!curve->is_array() || curve->size() < 2 || curve->size() > kMaxCurvePoints) {
+                r.error(cp, "expected 2 to " + std::to_string(kMaxCurvePoints) + " [force N, depth mm] points");
+            } else {
+                double f0 = 0.0, d0 = 0.0, slope0 = 0.0;
+                bool ok = true;
+                for (size_t i = 0; i < curve->size() && ok; ++i) {
+                    const std::string pp = cp + "/" + std::to_string(i);
+                    double fd[2];
+                    if (!read_numbers(r, (*curve)[i], pp, 2, fd)) {
+                        ok = false;
+                        break;
+                    }
+                    if (i == 0) {
+                        if (fd[0] != 0.0 || fd[1] != 0.0) {
+                            r.error(pp, "the curve must start at [0, 0]");
+                            ok = false;
+                        }
+                        continue;
+                    }
+                    if (!(fd[0] > f0) || !(fd[1] > d0)) {
+                        r.error(pp, "force and depth must both increase along the curve");
+                        ok = false;
+                        break;
+                    }
+                    const double slope = (fd[0] - f0) / (fd[1] - d0);  // N per mm
+                    if (slope < slope0 * (1.0 - 1e-12)) {
+                        r.error(pp, "the curve softens here (slope " + num(slope) + " N/mm after " + num(slope0) +
+                                        " N/mm); it must stiffen or stay linear");
+                        ok = false;
+                        break;
+                    }
+                    slope0 = slope;
+                    f0 = fd[0];
+                    d0 = fd[1];
+                    mat.yield_curve.push_back({fd[0], fd[1] * 1e-3});
+                }
+                if (!ok) mat.yield_curve.clear();
+            }
+        }
+        double mu[2] = {0.0, 0.0};
+        bool given[2] = {false, false};
+        const char* keys[2] = {"friction_static", "friction_kinetic"};
+        for (int k = 0; k < 2; ++k) {
+            const auto f = m.find(keys[k]);
+            if (f == m.end()) continue;
+            if (!finite_number(*f, mu[k]) || mu[k] < 0.0 || mu[k] > 10.0) {
+                r.error(here + "/" + keys[k], "expected a number in [0, 10], found " + shown(f->dump()));
+                mu[k] = 0.0;
+            } else {
+                given[k] = true;
+            }
+        }
+        if (given[0] && !given[1]) mu[1] = mu[0];
+        if (given[1] && !given[0]) mu[0] = mu[1];
+        if (mu[1] > mu[0]) r.error(here + "/friction_kinetic", "exceeds friction_static (" + num(mu[0]) + ")");
+        mat.friction_static = mu[0];
+        mat.friction_kinetic = std::min(mu[0], mu[1]);
+        out.push_back(std::move(mat));
+    }
+}
+
+// "material" and "regions" of an object.
+void read_object_materials(const Reporter& r, const json& v, const std::string& place,
+                           const std::vector<ContactMaterial>& materials, SceneObject& out) {
+    if (const auto it = v.find("material"); it != v.end()) {
+        if (!it->is_string()) {
+            r.error(place + "/material", "expected a material name");
+        } else if ((out.material = material_index(materials, it->get<std::string>())) < 0) {
+            r.error(place + "/material", "unknown material " + shown(it->get<std::string>()) + " (not in /materials)");
+        }
+    }
+    const auto it = v.find("regions");
+    if (it == v.end()) return;
+    const std::string rp = place + "/regions";
+    if (!it->is_array() || it->size() > kMaxRegions) {
+        r.error(rp, "expected an array of at most " + std::to_string(kMaxRegions) + " regions");
+        return;
+    }
+    for (size_t i = 0; i < it->size(); ++i) {
+        const std::string here = rp + "/" + std::to_string(i);
+        const json& g = (*it)[i];
+        if (!g.is_object()) {
+            r.error(here, "expected an object");
+            continue;
+        }
+        warn_unknown_keys(r, g, here, {"name", "material", "center", "radius", "normal", "min_cos"});
+        MaterialRegion reg;
+        if (const auto n = g.find("name"); n != g.end() && n->is_string()) reg.name = n->get<std::string>();
+        std::string mat;
+        bool ok = read_string(r, g, here, "material", mat);
+        if (ok && (reg.material = material_index(materials, mat)) < 0) {
+            r.error(here + "/material", "unknown material " + shown(mat) + " (not in /materials)");
+            ok = false;
+        }
+        double c[3];
+        if (const auto f = g.find("center"); f == g.end()) {
+            r.error(here + "/center", "missing");
+            ok = false;
+        } else if (read_numbers(r, *f, here + "/center", 3, c)) {
+            reg.center = Vec3(c[0], c[1], c[2]);
+        } else {
+            ok = false;
+        }
+        if (const auto f = g.find("radius"); f == g.end() || !finite_number(*f, reg.radius_m) || !(reg.radius_m > 0.0)) {
+            r.error(here + "/radius", "expected a positive radius in metres");
+            ok = false;
+        }
+        if (const auto f = g.find("normal"); f != g.end()) {
+            if (read_numbers(r, *f, here + "/normal", 3, c) && glm::length(Vec3(c[0], c[1], c[2])) > 0.0) {
+                reg.normal = glm::normalize(Vec3(c[0], c[1], c[2]));
+            } else {
+                if (f->is_array() && f->size() == 3) r.error(here + "/normal", "must not be zero");
+                ok = false;
+            }
+        }
+        if (const auto f = g.find("min_cos"); f != g.end()) {
+            if (!finite_number(*f, reg.min_cos) || reg.min_cos < -1.0 || reg.min_cos > 1.0) {
+                r.error(here + "/min_cos", "expected a number in [-1, 1]");
+                ok = false;
+            }
+        }
+        if (ok) out.regions.push_back(reg);
+    }
+}
+
 // name + mesh (+ pose for objects); loads the mesh.
 void read_body(const Reporter& r, const json& v, const std::string& place, bool has_pose, SceneObject& out) {
     if (!v.is_object()) {
@@ -117,7 +297,7 @@ void read_body(const Reporter& r, const json& v, const std::string& place, bool 
         return;
     }
     if (has_pose)
-        warn_unknown_keys(r, v, place, {"name", "mesh", "position", "orientation"});
+        warn_unknown_keys(r, v, place, {"name", "mesh", "position", "orientation", "material", "regions"});
     else
         warn_unknown_keys(r, v, place, {"name", "mesh"});
     read_string(r, v, place, "name", out.name);
@@ -366,7 +546,8 @@ SceneLoad load_scene(const std::string& path) {
         r.error("/format", "unknown format " + shown(found) + " (expected " + kFormat + ")");
         return result;
     }
-    warn_unknown_keys(r, doc, "", {"format", "objects", "tool", "haptic", "trajectory", "rate_hz"});
+    warn_unknown_keys(r, doc, "", {"format", "objects", "tool", "materials", "haptic", "trajectory", "rate_hz"});
+    if (const auto it = doc.find("materials"); it != doc.end()) read_materials(r, *it, scene.materials);
 
     // Objects: each loaded, names unique.
     if (const auto it = doc.find("objects"); it == doc.end()) {
@@ -378,6 +559,7 @@ SceneLoad load_scene(const std::string& path) {
             const std::string place = "/objects/" + std::to_string(i);
             SceneObject obj;
             read_body(r, (*it)[i], place, /*has_pose=*/true, obj);
+            if ((*it)[i].is_object()) read_object_materials(r, (*it)[i], place, scene.materials, obj);
             for (size_t j = 0; j < scene.objects.size(); ++j) {
                 if (!obj.name.empty() && scene.objects[j].name == obj.name)
                     r.error(place + "/name", "duplicate name " + shown(obj.name));

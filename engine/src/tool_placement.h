@@ -1,5 +1,6 @@
-// The convex tool placed in the world at a pose: its vertices, its face planes and the view of
-// it the separating-axis and distance tests take. Shared by the servo step and the CCD.
+// The tool's convex pieces placed in the world at a pose: vertices, face planes, bounding
+// capsules, and the view of one piece the separating-axis and distance tests take. Shared by the
+// servo step and the CCD.
 #pragma once
 
 #include "geometry.h"
@@ -11,7 +12,7 @@ inline void place_tool_vertices(const ModelTool& tool, const Quat& q, const Vec3
     for (size_t i = 0; i < tool.mesh.vertices.size(); ++i) vertices[i] = q * tool.mesh.vertices[i] + p;
 }
 
-// Face planes in the world: n . x <= d inside.
+// Face planes of every piece in the world: n . x <= d inside the piece.
 inline void place_tool_planes(const ModelTool& tool, const Quat& q, const Vec3& p, Vec3* normals, double* offsets) {
     for (size_t f = 0; f < tool.face_normals.size(); ++f) {
         normals[f] = q * tool.face_normals[f];
@@ -19,30 +20,42 @@ inline void place_tool_planes(const ModelTool& tool, const Quat& q, const Vec3& 
     }
 }
 
-// `rotation` (the tool's world orientation, kept current by the caller as the planes move)
-// enables the fast separating-axis test.
-// The capsules' axis points (kToolCapsules + 1 of them) in the world.
+// The capsules' axis points of every piece in the world: kToolCapsules + 1 per piece, piece k's
+// starting at points[k * (kToolCapsules + 1)].
 inline void place_tool_capsule(const ModelTool& tool, const Quat& q, const Vec3& p, Vec3* points) {
-    for (size_t k = 0; k < tool.capsule_points.size(); ++k) points[k] = q * tool.capsule_points[k] + p;
+    for (size_t k = 0; k < tool.pieces.size(); ++k)
+        for (size_t j = 0; j <= size_t(kToolCapsules); ++j)
+            points[k * (kToolCapsules + 1) + j] = q * tool.pieces[k].capsule_points[j] + p;
 }
 
-inline ConvexView tool_convex_view(const ModelTool& tool, const Vec3* vertices, const Vec3* normals,
+// The view of piece `k`. `vertices`, `normals`, `offsets` and `capsule` are the whole tool's
+// placed arrays (as filled above); `rotation` (the tool's world orientation, kept current by the
+// caller as the planes move) enables the fast separating-axis test.
+inline ConvexView tool_convex_view(const ModelTool& tool, size_t k, const Vec3* vertices, const Vec3* normals,
                                    const double* offsets, const Quat* rotation, const Vec3* capsule = nullptr) {
+    const ToolPiece& piece = tool.pieces[k];
     ConvexView v;
-    v.vertices = vertices;
-    v.vertex_count = static_cast<int>(tool.mesh.vertices.size());
-    v.normals = normals;
-    v.offsets = offsets;
-    v.face_count = static_cast<int>(tool.face_normals.size());
-    v.edges = reinterpret_cast<const uint32_t (*)[2]>(tool.edges.data());
-    v.edge_count = static_cast<int>(tool.edges.size());
-    v.depths = tool.face_depths.data();
-    v.edge_normals = reinterpret_cast<const Vec3 (*)[2]>(tool.edge_normals.data());
+    v.vertices = vertices + piece.vertex_begin;
+    v.vertex_count = static_cast<int>(piece.vertex_count);
+    v.normals = normals + piece.face_begin;
+    v.offsets = offsets + piece.face_begin;
+    v.face_count = static_cast<int>(piece.face_count);
+    v.edges = reinterpret_cast<const uint32_t (*)[2]>(tool.piece_edges.data() + piece.edge_begin);
+    v.edge_count = static_cast<int>(piece.edge_count);
+    v.depths = tool.face_depths.data() + piece.face_begin;
+    v.edge_normals = reinterpret_cast<const Vec3 (*)[2]>(tool.edge_normals.data() + piece.edge_begin);
     v.rotation = rotation;
-    v.capsule = capsule;
-    v.capsule_radii = tool.capsule_radii_m.data();
-    v.capsule_count = tool.capsule_count;
+    if (capsule) {
+        v.capsule = capsule + k * (kToolCapsules + 1);
+        v.capsule_radii = piece.capsule_radii_m.data();
+        v.capsule_count = piece.capsule_count;
+    }
     return v;
+}
+
+// Piece k's triangles, indexing its view's vertices.
+inline const uint32_t (*piece_triangles(const ModelTool& tool, size_t k))[3] {
+    return reinterpret_cast<const uint32_t (*)[3]>(tool.piece_triangles.data() + tool.pieces[k].triangle_begin);
 }
 
 }  // namespace sulcus

@@ -31,4 +31,9 @@ struct ExactCheck {
 ExactCheck exact_check(const TriMesh& tool, const Pose& tool_pose, const std::vector<PlacedMesh>& objects,
                        double gap_limit);
 
+// A tool made of convex pieces (a rigid union, e.g. connected_components of its mesh): the
+// largest penetration of any piece and the least distance of any piece.
+ExactCheck exact_check(const std::vector<TriMesh>& tool_pieces, const Pose& tool_pose,
+                       const std::vector<PlacedMesh>& objects, double gap_limit);
+
 }  // namespace sulcus

@@ -70,6 +70,11 @@ std::string validate_mesh(const TriMesh& mesh);
 // Builds the adjacency of a mesh that passed validate_mesh.
 MeshTopology build_topology(const TriMesh& mesh);
 
+// The connected components of a mesh (triangles joined through shared vertices), each with its
+// own vertex list in first-use order; components ordered by their first triangle. Unused
+// vertices are dropped.
+std::vector<TriMesh> connected_components(const TriMesh& mesh);
+
 // Signed volume enclosed by the mesh in cubic metres (> 0 for outward orientation).
 double mesh_volume(const TriMesh& mesh);
 

@@ -61,55 +61,113 @@ struct RendererSettings {
     qp::Settings qp;
 };
 
-// One rigid object of the scene with everything derived from its mesh.
+// Springs of a compliant material at most (a yield curve of up to 8 points).
+inline constexpr int kMaxMaterialSprings = 7;
+
+// A contact material as the step uses it. A compliant one is a chain of springs in series, each
+// but the last bottoming out at its cap: the exact form of a stiffening piecewise-linear yield
+// curve (ContactMaterial), and in the QP one slack variable per spring with its stiffness in the
+// objective.
+struct ModelMaterial {
+    bool compliant = false;
+    int springs = 0;
+    double stiffness_N_per_m[kMaxMaterialSprings] = {};
+    double cap_m[kMaxMaterialSprings] = {};  // +infinity for the last spring
+    double friction_static = 0.0;
+    double friction_kinetic = 0.0;
+};
+
+// Depth (m) a material's surface gives way under a normal force (N): 0 for a rigid one.
+double material_depth(const ModelMaterial& m, double force_N);
+
+// One object of the scene with everything derived from its mesh.
 struct ModelObject {
     std::string name;
     Pose pose;                 // local -> world
     TriMesh mesh;              // placed in the world (vertices already transformed)
     MeshTopology topology;
     Bvh bvh;                   // over the world-placed mesh
+    // Contact zones (Model::zone_material): the object's own, and per triangle and vertex where
+    // regions give some of it another material (empty when none do).
+    uint16_t zone = 0;
+    std::vector<uint16_t> triangle_zone;
+    std::vector<uint16_t> vertex_zone;
+    bool compliant = false;    // some zone of it is compliant
 };
 
 inline constexpr int kToolCapsules = 4;
+// Pieces a tool may have (the step keeps per-piece scratch of this size).
+inline constexpr int kMaxToolPieces = 16;
 
-// The tool: a closed convex triangle mesh in its own frame, with its features.
-struct ModelTool {
-    TriMesh mesh;
-    MeshTopology topology;
-    // Distinct face planes of the convex hull (coplanar triangles merged): unit normal and offset
-    // (n . x = d on the plane, n . x <= d inside), local frame.
-    std::vector<Vec3> face_normals;
-    std::vector<double> face_offsets;
-    // Extent of the tool behind each face plane: offset minus the smallest n . v over vertices.
-    std::vector<double> face_depths;
-    // Edges that are not flat (real edges of the convex polytope): vertex pairs, and the unit
-    // normals of the two triangles at each (local frame).
-    std::vector<std::array<uint32_t, 2>> edges;
-    std::vector<std::array<Vec3, 2>> edge_normals;
-    double radius_m = 0.0;  // largest distance from the local origin to a vertex
-    // Bounding capsules along the principal axis: the axis cut into kToolCapsules equal pieces
-    // (capsule k runs from capsule_points[k] to [k + 1], local frame), each with the radius of the
-    // slab of tool it covers. Cheap, tight lower bounds on distance for long tools such as probes.
+// One convex piece of the tool: ranges into the ModelTool arrays (each piece's vertices,
+// triangles, face planes and edges are contiguous) and its bounding capsules.
+struct ToolPiece {
+    uint32_t vertex_begin = 0, vertex_count = 0;
+    uint32_t triangle_begin = 0, triangle_count = 0;
+    uint32_t face_begin = 0, face_count = 0;
+    uint32_t edge_begin = 0, edge_count = 0;
+    // Bounding capsules along the piece's principal axis: the axis cut into kToolCapsules equal
+    // pieces (capsule k runs from capsule_points[k] to [k + 1], tool frame), each with the radius
+    // of the slab of the piece it covers. Cheap, tight lower bounds on distance for long pieces
+    // such as a probe's tip and shank.
     std::array<Vec3, kToolCapsules + 1> capsule_points{};
     std::array<double, kToolCapsules> capsule_radii_m{};
-    // kToolCapsules for a long tool (axis over four times its widest capsule), else 0: for a
-    // compact tool the bounds are loose and cost more than they save.
+    // kToolCapsules for a long piece (axis over four times its widest capsule), else 0: for a
+    // compact piece the bounds are loose and cost more than they save.
     int capsule_count = 0;
+};
+
+// The tool: a rigid union of closed convex pieces (the connected components of its mesh, which
+// may overlap), in its own frame, with their features.
+struct ModelTool {
+    TriMesh mesh;  // every piece, contiguous per piece
+    MeshTopology topology;
+    // Distinct face planes of each piece (coplanar triangles merged): unit normal and offset
+    // (n . x = d on the plane, n . x <= d inside the piece), local frame.
+    std::vector<Vec3> face_normals;
+    std::vector<double> face_offsets;
+    // Extent of the piece behind each face plane: offset minus the smallest n . v over its vertices.
+    std::vector<double> face_depths;
+    // Edges that are not flat (real edges of the convex pieces): vertex pairs (indices into
+    // mesh.vertices, and the same relative to their piece's first vertex), and the unit normals of
+    // the two triangles at each (local frame).
+    std::vector<std::array<uint32_t, 2>> edges;
+    std::vector<std::array<uint32_t, 2>> piece_edges;
+    std::vector<std::array<Vec3, 2>> edge_normals;
+    // Triangles with indices relative to their piece's first vertex.
+    std::vector<std::array<uint32_t, 3>> piece_triangles;
+    std::vector<uint8_t> vertex_piece;  // piece of each vertex
+    std::vector<ToolPiece> pieces;
+    double radius_m = 0.0;  // largest distance from the local origin to a vertex
 };
 
 struct Model {
     RendererSettings settings;
     ModelTool tool;
     std::vector<ModelObject> objects;
+    // materials[0] is the default: rigid and frictionless.
+    std::vector<ModelMaterial> materials;
+    std::vector<uint16_t> zone_material;  // material of each contact zone
+    // What the scene uses; the step computes nothing for what it does not.
+    bool any_compliant = false;
+    bool any_friction = false;
 };
 
 struct ModelBuild {
     std::unique_ptr<Model> model;
-    std::string error;  // one line when the model cannot be built (e.g. the tool is not convex)
+    std::string error;  // one line when the model cannot be built (e.g. a tool piece is not convex)
 };
 
+// `materials` are the scene's (SceneObject::material and regions index them).
 ModelBuild build_model(const TriMesh& tool, const std::vector<SceneObject>& objects,
-                       const RendererSettings& settings);
+                       const RendererSettings& settings, const std::vector<ContactMaterial>& materials = {});
+
+// The model of a loaded scene: its tool, objects and materials, with `settings` taking the
+// scene's haptic settings.
+ModelBuild build_model(const SceneFile& scene, RendererSettings settings);
+
+// Springs in series of a yield curve (see ModelMaterial); "" or why the curve is not usable.
+std::string material_from_curve(const ContactMaterial& in, ModelMaterial& out);
 
 // Kinds of linearized constraint atoms (seed paper eq. 6 and 7).
 enum class AtomKind : uint8_t {
@@ -176,6 +234,15 @@ struct StepStats {
     // Extra passes of the stages this tick because a solution's contact was not real (held on
     // the extended plane of a face or the line of an edge past its end).
     int passes = 0;
+    // Compliance: zones giving way at the solution and the deepest of them (m).
+    int soft_zones = 0;
+    double soft_depth_m = 0.0;
+    // Friction: the contacts' normal force (N), the static and kinetic limits of the tangential
+    // force (sum of mu N over the contacts), and whether the tool slides (kinetic) this tick.
+    double normal_force_N = 0.0;
+    double friction_static_limit_N = 0.0;
+    double friction_kinetic_limit_N = 0.0;
+    bool sliding = false;
 };
 
 struct StepResult {
@@ -193,6 +260,8 @@ struct State {
     int active_count = 0;
     Atom active[kMaxActiveAtoms];
     Pose last_haptic;
+    double soft_depth_m = 0.0;  // deepest compliant zone at the last tick's solution
+    bool sliding = false;       // friction: the tool slid (kinetic) at the last tick
 };
 
 // Starts a state with the graphic tool at `pose` (which must not penetrate).

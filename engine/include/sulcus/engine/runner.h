@@ -18,6 +18,7 @@ struct TickRecord {
     double step_us = 0.0;
     double penetration_m = 0.0;
     double gap_m = 0.0;  // distance to the objects on ticks with a force, else 0
+    double soft_depth_m = 0.0;  // how far the tool is inside compliant objects (exact check)
     int contacts = 0;
     StepStatus status = StepStatus::Free;
     StepStats stats;
@@ -32,7 +33,10 @@ struct RunSummary {
     std::string scene;
     long steps = 0;
     long contact_steps = 0;
-    double max_penetration_m = 0.0;
+    double max_penetration_m = 0.0;  // into rigid objects
+    double max_soft_depth_m = 0.0;   // into compliant objects (by design: force / stiffness)
+    double max_friction_limit_N = 0.0;
+    long sliding_steps = 0;          // ticks where friction let the tool slide
     double max_gap_in_contact_m = 0.0;
     double max_force_N = 0.0;
     double max_torque_Nm = 0.0;

@@ -4,6 +4,7 @@
 #include "sulcus/engine/mesh.h"
 #include "sulcus/engine/types.h"
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -17,11 +18,38 @@ struct HapticSettings {
     double weight_rotational = 1e-4;               // M, rotational rows (eq. 3), per rad^2
 };
 
+// What an object (or a region of one) is made of, for contact: rigid, or compliant; and its
+// Coulomb friction against the tool.
+struct ContactMaterial {
+    std::string name;
+    bool compliant = false;
+    // Compliant: how far the surface gives way (depth, m) under a normal force (N), a
+    // piecewise-linear curve through the origin given by its further points (force ascending),
+    // stiffening (slope force/depth never decreasing), extended with its last slope. A linear
+    // stiffness k is the one point (1 N, 1/k m).
+    std::vector<std::array<double, 2>> yield_curve;  // (force N, depth m)
+    double friction_static = 0.0;   // Coulomb coefficients, kinetic <= static
+    double friction_kinetic = 0.0;
+};
+
+// Triangles of an object that take another material: those whose centroid lies within
+// `radius_m` of `center` and whose outward normal n has n . normal >= min_cos (scene frame).
+struct MaterialRegion {
+    std::string name;
+    int material = 0;  // index into SceneFile::materials
+    Vec3 center{0.0};
+    double radius_m = 0.0;
+    Vec3 normal{0.0, 1.0, 0.0};
+    double min_cos = -1.0;
+};
+
 struct SceneObject {
     std::string name;
     std::string mesh_path;  // resolved (relative to the scene file's folder)
     Pose pose;
     TriMesh mesh;
+    int material = -1;  // index into SceneFile::materials; -1: rigid and frictionless
+    std::vector<MaterialRegion> regions;  // later regions win over earlier ones
 };
 
 // One row of the trajectory: time in seconds and the haptic tool's pose.
@@ -35,6 +63,7 @@ struct SceneFile {
     std::string name;  // file name without folder and extension
     std::vector<SceneObject> objects;
     SceneObject tool;
+    std::vector<ContactMaterial> materials;
     HapticSettings haptic;
     std::string trajectory_path;
     std::vector<TrajectorySample> trajectory;

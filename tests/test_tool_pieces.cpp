@@ -1,0 +1,125 @@
+// Tools made of several convex pieces (a rigid union): the model keeps each piece's features, and
+// the step takes candidates and constraints from every piece.
+#include "scene_helpers.h"
+
+#include "sulcus/engine/exact_check.h"
+
+#include <gtest/gtest.h>
+
+#include <set>
+
+namespace sulcus {
+namespace {
+
+using namespace test;
+
+TriMesh merge(const TriMesh& a, const TriMesh& b) {
+    TriMesh m = a;
+    const uint32_t base = uint32_t(a.vertices.size());
+    m.vertices.insert(m.vertices.end(), b.vertices.begin(), b.vertices.end());
+    for (const auto& t : b.triangles) m.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    return m;
+}
+
+// The piece an active atom's tool feature belongs to.
+int piece_of(const ModelTool& tool, const Atom& a) {
+    switch (a.kind) {
+        case AtomKind::VertexFace:
+        case AtomKind::FixedAxis: return tool.vertex_piece[a.tool_vertex];
+        case AtomKind::EdgeEdge: return tool.vertex_piece[tool.edges[a.tool_edge][0]];
+        case AtomKind::FaceVertex:
+            for (size_t k = 0; k < tool.pieces.size(); ++k)
+                if (a.tool_face >= tool.pieces[k].face_begin &&
+                    a.tool_face < tool.pieces[k].face_begin + tool.pieces[k].face_count)
+                    return int(k);
+    }
+    return -1;
+}
+
+// A probe-like tool: a straight tip (0.5 mm square, 10 mm long, its end at the origin) and a
+// shank bent off it at right angles near its top, overlapping the tip.
+TriMesh bent_probe() {
+    const TriMesh tip = make_box(Vec3(0.25 * mm, 5 * mm, 0.25 * mm), Vec3(0, 5 * mm, 0));
+    const TriMesh shank = make_box(Vec3(3 * mm, 0.5 * mm, 0.25 * mm), Vec3(2.75 * mm, 9.5 * mm, 0));
+    return merge(tip, shank);
+}
+
+TEST(ToolPieces, ModelKeepsEachConvexPiece) {
+    const ModelBuild b = build_model(bent_probe(), {}, RendererSettings{});
+    ASSERT_TRUE(b.model) << b.error;
+    const ModelTool& tool = b.model->tool;
+    ASSERT_EQ(tool.pieces.size(), 2u);
+    for (const ToolPiece& p : tool.pieces) {
+        EXPECT_EQ(p.vertex_count, 8u);
+        EXPECT_EQ(p.triangle_count, 12u);
+        EXPECT_EQ(p.face_count, 6u);   // a box: six planes
+        EXPECT_EQ(p.edge_count, 12u);  // and twelve real edges
+        for (uint32_t v = p.vertex_begin; v < p.vertex_begin + p.vertex_count; ++v)
+            EXPECT_EQ(tool.vertex_piece[v], &p - tool.pieces.data());
+    }
+    // Each piece's vertices lie inside its own face planes.
+    for (const ToolPiece& p : tool.pieces)
+        for (uint32_t f = p.face_begin; f < p.face_begin + p.face_count; ++f)
+            for (uint32_t v = p.vertex_begin; v < p.vertex_begin + p.vertex_count; ++v)
+                EXPECT_LE(glm::dot(tool.face_normals[f], tool.mesh.vertices[v]) - tool.face_offsets[f], 1e-15);
+    // The tip is long enough to carry bounding capsules; both pieces are.
+    EXPECT_EQ(tool.pieces[0].capsule_count, kToolCapsules);
+}
+
+TEST(ToolPieces, RejectsANonConvexPieceAndTooManyPieces) {
+    // An L-shaped single piece: two boxes sharing a face would be one non-convex component.
+    const std::vector<Vec2> ell = {{0, 0}, {2e-3, 0}, {2e-3, 1e-3}, {1e-3, 1e-3}, {1e-3, 2e-3}, {0, 2e-3}};
+    const TriMesh box = make_box(Vec3(1e-3));
+    const ModelBuild b = build_model(merge(box, make_extruded_polygon(ell, 5e-3, 6e-3)), {}, RendererSettings{});
+    ASSERT_FALSE(b.model);
+    EXPECT_NE(b.error.find("piece 1: not convex"), std::string::npos) << b.error;
+
+    TriMesh many;
+    for (int i = 0; i <= kMaxToolPieces; ++i)
+        many = merge(many, make_box(Vec3(0.1e-3), Vec3(i * 1e-3, 0, 0)));
+    const ModelBuild m = build_model(many, {}, RendererSettings{});
+    ASSERT_FALSE(m.model);
+    EXPECT_NE(m.error.find("pieces"), std::string::npos) << m.error;
+}
+
+// The tip pressed on the pocket floor while the shank rests on a neighbouring crown: two contact
+// regions, one on each piece, and no penetration anywhere.
+TEST(ToolPieces, ShankOnNeighbourCrownWhileTipOnPocketFloor) {
+    const TriMesh tool = bent_probe();
+    const std::vector<SceneObject> objects = {
+        object("floor", make_box(Vec3(5 * mm, 1 * mm, 5 * mm), Vec3(0, -1 * mm, 0))),
+        // Its top at 9 mm, under the shank (x 3..5 mm), clear of the tip.
+        object("neighbour crown", make_box(Vec3(1 * mm, 1 * mm, 1 * mm), Vec3(4 * mm, 8 * mm, 0))),
+    };
+    auto model = model_of(tool, objects);
+    const std::vector<TriMesh> pieces = connected_components(tool);
+    std::vector<PlacedMesh> placed;
+    for (const SceneObject& o : objects) placed.push_back(PlacedMesh{&o.mesh, o.pose});
+
+    State state = make_state(pose(Vec3(0, 1 * mm, 0)));
+    StepResult r;
+    double worst = 0.0;
+    const int down = 400, hold = 200;
+    for (int i = 0; i <= down + hold; ++i) {
+        const double y = 1 * mm - 1.3 * mm * std::min(1.0, double(i) / down);  // to 0.3 mm below the floor
+        r = step(*model, state, pose(Vec3(0, y, 0)));
+        ASSERT_TRUE(std::isfinite(r.force_N.y));
+        worst = std::max(worst, exact_check(pieces, r.graphic, placed, 0.0).penetration_m);
+    }
+    EXPECT_LE(worst, 1e-6);
+    EXPECT_EQ(r.status, StepStatus::Contact);
+    EXPECT_EQ(r.stats.regions, 2);
+    std::set<int> pieces_touching, objects_touching;
+    for (int i = 0; i < state.active_count; ++i) {
+        pieces_touching.insert(piece_of(model->tool, state.active[i]));
+        objects_touching.insert(state.active[i].object);
+    }
+    EXPECT_EQ(pieces_touching, (std::set<int>{0, 1}));
+    EXPECT_EQ(objects_touching, (std::set<int>{0, 1}));
+    // Both contacts carry the push: the tool rests at the floor and on the crown.
+    EXPECT_NEAR(r.graphic.position.y, 0.0, 1e-6);
+    EXPECT_NEAR(r.force_N.y, 1000.0 * 0.3 * mm, 1e-3);
+}
+
+}  // namespace
+}  // namespace sulcus
