@@ -16,7 +16,6 @@ CcdResult conservative_advancement(const Model& model, const Pose& base, const d
     const Vec3 th(x[3], x[4], x[5]);
     const double speed = glm::length(dp) + glm::length(th) * model.tool.radius_m;
     const ModelTool& tool = model.tool;
-    const size_t pieces = tool.pieces.size();
     double tau = 0.0;
     for (int it = 0; it < max_iterations; ++it) {
         r.iterations = it + 1;
@@ -33,18 +32,16 @@ CcdResult conservative_advancement(const Model& model, const Pose& base, const d
         for (int i = 0; i < near_count; ++i) {
             const ModelObject& obj = model.objects[near[i].object];
             const auto& t = obj.mesh.triangles[near[i].tri];
-            for (size_t k = 0; k < pieces; ++k) {
-                const ConvexView view = tool_convex_view(tool, k, scratch.vertices, scratch.normals, scratch.offsets,
-                                                         scratch.rotation, scratch.capsule);
-                d = std::min(d, distance_convex_triangle(view, piece_triangles(tool, k),
-                                                         int(tool.pieces[k].triangle_count), obj.mesh.vertices[t[0]],
-                                                         obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]],
-                                                         std::min(d, enough)));
-                if (d <= clearance) {
-                    r.hit = true;
-                    r.toi = tau;
-                    return r;
-                }
+            const size_t k = near[i].piece;
+            const ConvexView view = tool_convex_view(tool, k, scratch.vertices, scratch.normals, scratch.offsets,
+                                                     scratch.rotation, scratch.capsule);
+            d = std::min(d, distance_convex_triangle(view, piece_triangles(tool, k), int(tool.pieces[k].triangle_count),
+                                                     obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
+                                                     obj.mesh.vertices[t[2]], std::min(d, enough)));
+            if (d <= clearance) {
+                r.hit = true;
+                r.toi = tau;
+                return r;
             }
         }
         if (tau >= 1.0 || speed <= 0.0) {

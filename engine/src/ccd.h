@@ -9,9 +9,12 @@
 
 namespace sulcus {
 
+// An object triangle within reach of one piece of the tool (a triangle near two pieces is listed
+// once for each).
 struct NearTriangle {
     uint16_t object;
     uint32_t tri;
+    uint8_t piece = 0;
 };
 
 struct CcdScratch {

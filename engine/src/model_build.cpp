@@ -2,6 +2,8 @@
 // each object's world-placed mesh, adjacency and BVH.
 #include "sulcus/engine/renderer.h"
 
+#include "geometry.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -159,23 +161,26 @@ std::string build_tool(const TriMesh& mesh, ModelTool& tool) {
 
 // Zones of an object: its own material, then each region's over the triangles it selects.
 std::string assign_zones(const SceneObject& so, Model& model, ModelObject& o) {
-    auto add_zone = [&](int scene_material) {
+    auto add_zone = [&](int scene_material, const Vec3& direction) {
         model.zone_material.push_back(uint16_t(scene_material + 1));  // 0 is the default material
+        model.zone_direction.push_back(direction);
         return uint16_t(model.zone_material.size() - 1);
     };
     if (model.zone_material.size() + 1 + so.regions.size() > 65535) return "too many material zones (at most 65535)";
-    o.zone = add_zone(so.material);
+    o.zone = add_zone(so.material, Vec3(0.0));
     bool compliant = model.materials[model.zone_material[o.zone]].compliant;
     if (!so.regions.empty()) {
         o.triangle_zone.assign(o.mesh.triangles.size(), o.zone);
         for (const MaterialRegion& reg : so.regions) {
-            const uint16_t z = add_zone(reg.material);
+            const uint16_t z = add_zone(reg.material, glm::normalize(reg.normal));
             compliant |= model.materials[model.zone_material[z]].compliant;
             for (size_t t = 0; t < o.mesh.triangles.size(); ++t) {
                 const auto& tri = o.mesh.triangles[t];
-                const Vec3 c = (o.mesh.vertices[tri[0]] + o.mesh.vertices[tri[1]] + o.mesh.vertices[tri[2]]) / 3.0;
-                if (glm::length(c - reg.center) <= reg.radius_m &&
-                    glm::dot(o.topology.triangle_normals[t], reg.normal) >= reg.min_cos)
+                // A triangle that reaches into the sphere (a flat floor decimates into large
+                // triangles whose centroids may lie far from the site).
+                const TriClosest c = closest_on_triangle(reg.center, o.mesh.vertices[tri[0]], o.mesh.vertices[tri[1]],
+                                                         o.mesh.vertices[tri[2]]);
+                if (c.distance <= reg.radius_m && glm::dot(o.topology.triangle_normals[t], reg.normal) >= reg.min_cos)
                     o.triangle_zone[t] = z;
             }
         }

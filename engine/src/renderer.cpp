@@ -111,11 +111,17 @@ struct Inside {
     double facing;
 };
 
+// An object vertex or edge near a piece of the tool.
 struct ObjFeature {
     uint16_t object;
     uint32_t id;
-    bool operator<(const ObjFeature& o) const { return object != o.object ? object < o.object : id < o.id; }
-    bool operator==(const ObjFeature& o) const { return object == o.object && id == o.id; }
+    uint8_t piece;
+    bool operator<(const ObjFeature& o) const {
+        if (object != o.object) return object < o.object;
+        if (id != o.id) return id < o.id;
+        return piece < o.piece;
+    }
+    bool operator==(const ObjFeature& o) const { return object == o.object && id == o.id && piece == o.piece; }
 };
 
 // An alternative principal contact: atoms[replace] swapped for `atom`.
@@ -185,6 +191,11 @@ struct Workspace {
     // Compliance of the candidate being solved and of the best one: each atom's slack zone
     // (-1: rigid) and the zones' slacks.
     int8_t cand_slot[kMaxAtoms];
+    // Reordering a candidate whose atoms outnumber the QP's rows.
+    Atom order_atoms[kMaxAtoms];
+    int8_t order_slots[kMaxAtoms];
+    double order_value[kMaxAtoms];
+    int order_index[kMaxAtoms];
     Slacks slacks;
     int8_t best_slot[kMaxAtoms];
     Slacks best_slacks;
@@ -216,23 +227,27 @@ void set_tool_planes(const Model& model, const Quat& q, const Vec3& p, Workspace
     w.face_q = q;
 }
 
-// detect: triangles whose boxes meet the tool's box inflated by `reach`. False on overflow.
+// detect: triangles whose boxes meet a piece's box inflated by `reach`, per piece (a long bent
+// probe's own box would hold much of the scene). False on overflow.
 bool gather_near(const Model& model, const Vec3* tool_world, double reach, Workspace& w) {
-    Aabb box;
-    for (size_t i = 0; i < model.tool.mesh.vertices.size(); ++i) box.grow(tool_world[i]);
-    box.inflate(reach);
     w.near_count = 0;
     bool overflow = false;
-    for (size_t o = 0; o < model.objects.size(); ++o) {
-        model.objects[o].bvh.query(box, [&](uint32_t tri) {
-            if (w.near_count >= kMaxNear) {
-                overflow = true;
-                return false;
-            }
-            w.near[w.near_count++] = NearTri{static_cast<uint16_t>(o), tri};
-            return true;
-        });
-        if (overflow) return false;
+    for (size_t k = 0; k < model.tool.pieces.size(); ++k) {
+        const ToolPiece& piece = model.tool.pieces[k];
+        Aabb box;
+        for (uint32_t v = piece.vertex_begin; v < piece.vertex_begin + piece.vertex_count; ++v) box.grow(tool_world[v]);
+        box.inflate(reach);
+        for (size_t o = 0; o < model.objects.size(); ++o) {
+            model.objects[o].bvh.query(box, [&](uint32_t tri) {
+                if (w.near_count >= kMaxNear) {
+                    overflow = true;
+                    return false;
+                }
+                w.near[w.near_count++] = NearTri{static_cast<uint16_t>(o), tri, static_cast<uint8_t>(k)};
+                return true;
+            });
+            if (overflow) return false;
+        }
     }
     return true;
 }
@@ -333,7 +348,6 @@ bool in_vertex_cone(const ModelObject& obj, uint32_t v, const Vec3& p) {
 // `soft` inside a compliant object: its features stay in play that far behind their surface.
 void gather_atoms(const Model& model, double reach, double soft, const Vec3& push, Workspace& w) {
     const ModelTool& tool = model.tool;
-    const int nv = static_cast<int>(tool.mesh.vertices.size());
     auto back_of = [&](const ModelObject& o) { return o.compliant ? kBackFace + soft : kBackFace; };
     auto reach_of = [&](const ModelObject& o) { return o.compliant ? reach + soft : reach; };
     // Whether a constraint normal points within 60 degrees of the push (true without a push).
@@ -354,7 +368,8 @@ void gather_atoms(const Model& model, double reach, double soft, const Vec3& pus
         const Vec3 &p0 = obj.mesh.vertices[t[0]], &p1 = obj.mesh.vertices[t[1]], &p2 = obj.mesh.vertices[t[2]];
         const Vec3& n = obj.topology.triangle_normals[nt.tri];
         const double back = back_of(obj), far = reach_of(obj);
-        for (int a = 0; a < nv; ++a) {
+        const ToolPiece& piece = tool.pieces[nt.piece];
+        for (int a = int(piece.vertex_begin); a < int(piece.vertex_begin + piece.vertex_count); ++a) {
             const double plane = glm::dot(n, w.tool_world[a] - p0);
             if (plane > reach || plane < -back) continue;
             const TriClosest c = closest_on_triangle(w.tool_world[a], p0, p1, p2);
@@ -379,9 +394,9 @@ void gather_atoms(const Model& model, double reach, double soft, const Vec3& pus
             }
         }
         for (int k = 0; k < 3; ++k) {
-            if (w.overt_count < kMaxFeatures) w.overts[w.overt_count++] = ObjFeature{nt.object, t[k]};
+            if (w.overt_count < kMaxFeatures) w.overts[w.overt_count++] = ObjFeature{nt.object, t[k], nt.piece};
             if (w.oedge_count < kMaxFeatures)
-                w.oedges[w.oedge_count++] = ObjFeature{nt.object, obj.topology.triangle_edges[nt.tri][k]};
+                w.oedges[w.oedge_count++] = ObjFeature{nt.object, obj.topology.triangle_edges[nt.tri][k], nt.piece};
         }
     }
     std::sort(w.feats, w.feats + w.feat_count);
@@ -514,7 +529,8 @@ void gather_atoms(const Model& model, double reach, double soft, const Vec3& pus
         const Convexity cv = obj.topology.vertex_convexity[v];
         if (cv != Convexity::Convex && cv != Convexity::Mixed) continue;
         const Vec3& p = obj.mesh.vertices[v];
-        for (const ToolPiece& piece : tool.pieces) {
+        {
+            const ToolPiece& piece = tool.pieces[w.overts[i].piece];
             const int f0 = int(piece.face_begin), f1 = int(piece.face_begin + piece.face_count);
             int best = -1;
             double best_s = -1e300;
@@ -559,7 +575,8 @@ void gather_atoms(const Model& model, double reach, double soft, const Vec3& pus
         const Vec3& v1 = obj.mesh.vertices[e.v[1]];
         const Vec3 eo = v1 - v0;
         const Vec3 bisector = obj.topology.triangle_normals[e.tri[0]] + obj.topology.triangle_normals[e.tri[1]];
-        for (size_t te = 0; te < tool.edges.size(); ++te) {
+        const ToolPiece& piece = tool.pieces[w.oedges[i].piece];
+        for (size_t te = piece.edge_begin; te < piece.edge_begin + piece.edge_count; ++te) {
             const Vec3& a0 = w.tool_world[tool.edges[te][0]];
             const Vec3& a1 = w.tool_world[tool.edges[te][1]];
             const SegmentClosest sc = closest_segments(a0, a1, v0, v1);
@@ -785,6 +802,18 @@ void assign_slacks(const Model& model, Workspace& w) {
     }
 }
 
+// How far an atom's constraint moves per metre its zone gives way: 1 (every face of the zone along
+// its own normal), or for a zone that gives way along a direction d, n . d, at least 0 (n the
+// constraint's normal): the zone's surface translates along d, so what did not touch it before
+// does not touch it after.
+double give_coefficient(const Model& model, const Atom& a, const ToolPoseAt& at) {
+    const Vec3& d = model.zone_direction[atom_zone(model, a)];
+    if (d.x == 0.0 && d.y == 0.0 && d.z == 0.0) return 1.0;
+    double grad[6];
+    evaluate_atom(model, a, at, grad);
+    return std::max(0.0, grad[0] * d.x + grad[1] * d.y + grad[2] * d.z);
+}
+
 // How far the zone of slot `slot` gives way at the slack values `x` (m).
 double slot_depth(const Slacks& sl, int slot, const double* x) {
     if (slot < 0) return 0.0;
@@ -826,6 +855,37 @@ void record_friction(const Model& model, const ToolPoseAt& at, int rows, Workspa
         f.mu_kinetic[f.count] = m.friction_kinetic;
         ++f.count;
     }
+}
+
+// A candidate with more atoms than the QP has rows: the most binding (least exact value at x, the
+// violated first) become the rows, ties in their order. The warm start follows its atoms.
+void order_rows(const Model& model, Workspace& w, const ToolPoseAt& at, const double* x) {
+    const int n = w.cand_count;
+    for (int i = 0; i < n; ++i) {
+        w.order_index[i] = i;
+        const int slot = w.cand_slot[i];
+        w.order_value[i] = evaluate_atom(model, w.cand[i], at, nullptr) +
+                           (slot < 0 ? 0.0 : give_coefficient(model, w.cand[i], at) * slot_depth(w.slacks, slot, x));
+    }
+    Atom warm_atoms[qp::kVars];
+    int warm_count = 0;
+    for (int k = 0; k < w.warm.count; ++k)
+        if (w.warm.active[k] >= 0 && w.warm.active[k] < n) warm_atoms[warm_count++] = w.cand[w.warm.active[k]];
+    std::stable_sort(w.order_index, w.order_index + n,
+                     [&](int a, int b) { return w.order_value[a] < w.order_value[b]; });
+    for (int i = 0; i < n; ++i) {
+        w.order_atoms[i] = w.cand[w.order_index[i]];
+        w.order_slots[i] = w.cand_slot[w.order_index[i]];
+    }
+    std::copy(w.order_atoms, w.order_atoms + n, w.cand);
+    std::copy(w.order_slots, w.order_slots + n, w.cand_slot);
+    w.warm.count = 0;
+    for (int k = 0; k < warm_count; ++k)
+        for (int i = 0; i < qp::kMaxRows; ++i)
+            if (w.cand[i].same_as(warm_atoms[k])) {
+                w.warm.active[w.warm.count++] = i;
+                break;
+            }
 }
 
 // solve: one candidate set by sequential linearization (re-linearize until exact).
@@ -873,11 +933,14 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             }
     // The exact value of atom i with its zone's give: >= 0 when it holds.
     auto value = [&](int i, const ToolPoseAt& at) {
-        return evaluate_atom(model, w.cand[i], at, nullptr) + slot_depth(w.slacks, w.cand_slot[i], x);
+        const int slot = w.cand_slot[i];
+        return evaluate_atom(model, w.cand[i], at, nullptr) +
+               (slot < 0 ? 0.0 : give_coefficient(model, w.cand[i], at) * slot_depth(w.slacks, slot, x));
     };
     int guard_rounds = 0;
     for (int it = 0; it < S.max_relinearizations; ++it) {
         const ToolPoseAt at = tool_pose_at(base, x);
+        if (w.cand_count > qp::kMaxRows) order_rows(model, w, at, x);
         const int rows = std::min(w.cand_count, qp::kMaxRows);
         const int vars = w.slacks.vars;
         P.rows = rows;
@@ -894,8 +957,10 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             if (vars > qp::kPoseVars) {
                 const int slot = w.cand_slot[i];
                 for (int v = qp::kPoseVars; v < vars; ++v) P.a[i][v] = 0.0;
-                if (slot >= 0)
-                    for (int v = w.slacks.first[slot]; v < w.slacks.first[slot] + w.slacks.count[slot]; ++v) P.a[i][v] = 1.0;
+                if (slot >= 0) {
+                    const double c = give_coefficient(model, w.cand[i], at);
+                    for (int v = w.slacks.first[slot]; v < w.slacks.first[slot] + w.slacks.count[slot]; ++v) P.a[i][v] = c;
+                }
             }
         }
         const qp::Status st = qp::solve(P, S.qp, w.warm.count ? &w.warm : nullptr, w.solution);
@@ -935,19 +1000,18 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         int missed = 0;
         NearTri missed_tris[8];
         uint8_t missed_piece[8];
-        for (size_t k = 0; k < model.tool.pieces.size() && missed < 8; ++k) {
+        for (int i = 0; i < w.near_count && missed < 8; ++i) {
+            const size_t k = w.near[i].piece;
             const ConvexView moved = tool_view(model, k, w.tool_moved, w);
-            for (int i = 0; i < w.near_count && missed < 8; ++i) {
-                const ModelObject& obj = model.objects[w.near[i].object];
-                const auto& t = obj.mesh.triangles[w.near[i].tri];
-                const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
-                if (capsule_lower_bound(moved, t0, t1, t2) > 0.0) continue;  // clear of the piece's capsules
-                const SatResult sat = separate_convex_triangle(moved, t0, t1, t2);
-                const double give = triangle_zone_depth(model, w.slacks, w.near[i]);
-                if (sat.separation < -(S.constraint_tol_m + give)) {
-                    missed_piece[missed] = uint8_t(k);
-                    missed_tris[missed++] = w.near[i];
-                }
+            const ModelObject& obj = model.objects[w.near[i].object];
+            const auto& t = obj.mesh.triangles[w.near[i].tri];
+            const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
+            if (capsule_lower_bound(moved, t0, t1, t2) > 0.0) continue;  // clear of the piece's capsules
+            const SatResult sat = separate_convex_triangle(moved, t0, t1, t2);
+            const double give = triangle_zone_depth(model, w.slacks, w.near[i]);
+            if (sat.separation < -(S.constraint_tol_m + give)) {
+                missed_piece[missed] = uint8_t(k);
+                missed_tris[missed++] = w.near[i];
             }
         }
         set_tool_planes(model, base.orientation, base.position, w);
@@ -1090,9 +1154,9 @@ int count_regions(const Model& model, const Workspace& w, const Atom* atoms, int
 }
 
 // How far the zone of the chosen candidate's atom i gives way (m).
-double best_give(const Workspace& w, int i) {
+double best_give(const Model& model, const Workspace& w, int i, const ToolPoseAt& at) {
     const int slot = w.best_slot[i];
-    return slot < 0 ? 0.0 : w.best_slacks.depth[slot];
+    return slot < 0 ? 0.0 : give_coefficient(model, w.best[i], at) * w.best_slacks.depth[slot];
 }
 
 // The contacts of the chosen atom set at x: an atom within 2 tolerances of zero is touching; it
@@ -1113,7 +1177,7 @@ ContactCheck check_contacts(const Model& model, const Pose& base, const double x
     bool touching = false;
     for (int i = 0; i < w.best_count; ++i) {
         const Atom& a = w.best[i];
-        const double give = best_give(w, i);
+        const double give = best_give(model, w, i, at);
         if (evaluate_atom(model, a, at, nullptr) + give > 2.0 * tol) continue;
         touching = true;
         const ModelObject& o = model.objects[a.object];
@@ -1418,7 +1482,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             // The active contacts: atoms touching at the solution.
             const ToolPoseAt at = tool_pose_at(base, x_sol);
             for (int i = 0; i < w.best_count; ++i) {
-                const double g = evaluate_atom(model, w.best[i], at, nullptr) + best_give(w, i);
+                const double g = evaluate_atom(model, w.best[i], at, nullptr) + best_give(model, w, i, at);
                 if (g <= S.contact_distance_m) {
                     const Atom& a = w.best[i];
                     if (a.kind == AtomKind::VertexFace) ++res.stats.active_vf;

@@ -148,6 +148,10 @@ struct Model {
     // materials[0] is the default: rigid and frictionless.
     std::vector<ModelMaterial> materials;
     std::vector<uint16_t> zone_material;  // material of each contact zone
+    // The direction a compliant zone gives way along (a region's normal: its surface translates
+    // along it), or zero: each face of the zone gives way along its own normal (an object's own
+    // material).
+    std::vector<Vec3> zone_direction;
     // What the scene uses; the step computes nothing for what it does not.
     bool any_compliant = false;
     bool any_friction = false;
