@@ -11,6 +11,7 @@
 #include <map>
 #include <numbers>
 #include <set>
+#include <string>
 #include <vector>
 
 namespace sulcus {
@@ -164,6 +165,136 @@ TEST_P(ProbeKindTest, CollisionTipIsAValidClosedMeshOfBoundedSize) {
     std::printf("[ %s ] collision: %zu vertices, %zu triangles, %zu face planes, %zu edges, length %.2f mm\n",
                 probe_kind_name(GetParam()), m.vertices.size(), m.triangles.size(), built.model->tool.face_normals.size(),
                 built.model->tool.edges.size(), probe_spec(GetParam()).collision_length_m / kMm);
+}
+
+// Connected components of a mesh (through shared vertices), as sets of triangle indices.
+std::vector<std::vector<size_t>> components_of(const TriMesh& m) {
+    std::vector<size_t> parent(m.vertices.size());
+    for (size_t i = 0; i < parent.size(); ++i) parent[i] = i;
+    auto find = [&](size_t v) {
+        while (parent[v] != v) v = parent[v] = parent[parent[v]];
+        return v;
+    };
+    for (const auto& t : m.triangles) {
+        parent[find(t[1])] = find(t[0]);
+        parent[find(t[2])] = find(t[0]);
+    }
+    std::map<size_t, std::vector<size_t>> by_root;
+    std::vector<size_t> order;
+    for (size_t i = 0; i < m.triangles.size(); ++i) {
+        const size_t r = find(m.triangles[i][0]);
+        if (!by_root.count(r)) order.push_back(r);
+        by_root[r].push_back(i);
+    }
+    std::vector<std::vector<size_t>> out;
+    for (size_t r : order) out.push_back(by_root[r]);
+    return out;
+}
+
+// Largest distance of a vertex in front of a face plane (<= 0 for a convex, outward mesh).
+double convexity_violation(const TriMesh& m) {
+    double worst = -1e300;
+    for (const auto& t : m.triangles) {
+        const Vec3 &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
+        const Vec3 n = glm::normalize(glm::cross(b - a, c - a));
+        for (const Vec3& v : m.vertices) worst = std::max(worst, glm::dot(n, v - a));
+    }
+    return worst;
+}
+
+TEST_P(ProbeKindTest, CollisionPiecesAreClosedOutwardConvexAndAreTheMeshComponents) {
+    const std::vector<TriMesh> pieces = make_probe_collision_pieces(GetParam());
+    const TriMesh all = make_probe_collision(GetParam());
+    ASSERT_GE(pieces.size(), 4u);  // tip, shank, ferrule, grip at least
+    // The first piece is the working tip, unchanged.
+    const TriMesh tip = make_probe_tip_collision(GetParam());
+    EXPECT_EQ(pieces[0].vertices, tip.vertices);
+    EXPECT_EQ(pieces[0].triangles, tip.triangles);
+    size_t vertices = 0, triangles = 0;
+    for (size_t k = 0; k < pieces.size(); ++k) {
+        const TriMesh& p = pieces[k];
+        EXPECT_EQ(validate_mesh(p), "") << "piece " << k;
+        EXPECT_GT(mesh_volume(p), 0.0) << "piece " << k;
+        EXPECT_LE(convexity_violation(p), 1e-12) << "piece " << k << " is not convex";
+        EXPECT_EQ(components_of(p).size(), 1u) << "piece " << k;
+        vertices += p.vertices.size();
+        triangles += p.triangles.size();
+    }
+    // The scene's tool: the pieces, in order, as the connected components of one valid mesh.
+    EXPECT_EQ(validate_mesh(all), "");
+    EXPECT_EQ(all.vertices.size(), vertices);
+    const auto comps = components_of(all);
+    ASSERT_EQ(comps.size(), pieces.size());
+    size_t first = 0;
+    for (size_t k = 0; k < comps.size(); ++k) {
+        EXPECT_EQ(comps[k].size(), pieces[k].triangles.size()) << k;
+        EXPECT_EQ(comps[k].front(), first) << k;
+        first += pieces[k].triangles.size();
+    }
+    // The tool reaches from the tip end to the end of the handle.
+    double reach = 0;
+    for (const Vec3& v : all.vertices) reach = std::max(reach, glm::length(v));
+    EXPECT_GT(reach, 120 * kMm);
+    std::string per_piece;
+    for (const TriMesh& p : pieces) per_piece += " " + std::to_string(p.vertices.size());
+    std::printf("[ %s ] collision: %zu pieces, %zu vertices, %zu triangles; vertices per piece:%s\n",
+                probe_kind_name(GetParam()), pieces.size(), vertices, triangles, per_piece.c_str());
+}
+
+// Distance from p to the union of closed convex pieces (0 inside one).
+double distance_to_union(const std::vector<TriMesh>& pieces, const Vec3& p) {
+    double best = 1e300;
+    for (const TriMesh& m : pieces) {
+        bool inside = true;
+        for (const auto& t : m.triangles) {
+            const Vec3 &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
+            if (glm::dot(glm::cross(b - a, c - a), p - a) > 0) {
+                inside = false;
+                break;
+            }
+        }
+        if (inside) return 0.0;
+        best = std::min(best, distance_to_surface(m, p));
+    }
+    return best;
+}
+
+TEST_P(ProbeKindTest, CollisionPiecesFollowTheDrawnBodyAndHandle) {
+    const ProbeSpec& spec = probe_spec(GetParam());
+    Asset asset;
+    const AssetNode node = make_probe_node(GetParam(), asset);
+    // The drawn steel body (tip, working end, shank) and handle; the marks are a few um proud.
+    TriMesh drawn = node.parts[0].mesh;
+    {
+        const TriMesh& h = node.parts[1].mesh;
+        const auto base = uint32_t(drawn.vertices.size());
+        drawn.vertices.insert(drawn.vertices.end(), h.vertices.begin(), h.vertices.end());
+        for (const auto& t : h.triangles) drawn.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    }
+    const std::vector<TriMesh> pieces = make_probe_collision_pieces(GetParam());
+    // Every drawn vertex is covered by the collision within 0.05 mm...
+    double worst_drawn = 0;
+    Vec3 worst_at(0);
+    for (const Vec3& v : drawn.vertices) {
+        const double d = distance_to_union(pieces, v);
+        if (d > worst_drawn) worst_drawn = d, worst_at = v;
+    }
+    EXPECT_LE(worst_drawn, 0.05 * kMm) << "drawn vertex at (" << worst_at.x / kMm << ", " << worst_at.y / kMm << ", "
+                                       << worst_at.z / kMm << ") mm is not covered";
+    // ...and no piece stands out of the drawn body by more than 0.05 mm (vertices, edge midpoints,
+    // face centroids). The Nabers tip is the documented exception: its hull spans the arc's chord.
+    double worst_piece = 0;
+    for (size_t k = 0; k < pieces.size(); ++k) {
+        const bool nabers_tip = k == 0 && spec.curve_radius_m > 0;
+        for (const Vec3& p : surface_samples(pieces[k], !nabers_tip)) {
+            const double w = winding_number(drawn, p);
+            const double d = w > 0.5 ? 0.0 : distance_to_surface(drawn, p);
+            worst_piece = std::max(worst_piece, d);
+            EXPECT_LE(d, 0.05 * kMm) << "piece " << k << " at y = " << p.y / kMm << " mm";
+        }
+    }
+    std::printf("[ %s ] drawn body uncovered by at most %.1f um; collision outside the drawing by at most %.1f um\n",
+                probe_kind_name(GetParam()), worst_drawn / kUm, worst_piece / kUm);
 }
 
 TEST_P(ProbeKindTest, CollisionTipIsConvex) {
@@ -416,9 +547,10 @@ TEST_P(ProbeKindTest, NodeExtrasDescribeTheProbe) {
     ASSERT_EQ(marks_mm.size(), spec.graduations_m.size());
     for (size_t i = 0; i < marks_mm.size(); ++i) EXPECT_NEAR(marks_mm[i] * kMm, spec.graduations_m[i], 1e-15);
     EXPECT_EQ(node.extras.at("bands_mm").size(), spec.marks.size());
-    // The collision mesh travels with the node, exactly.
-    const TriMesh tip = make_probe_tip_collision(GetParam());
+    // The collision mesh (every piece) travels with the node, exactly.
+    const TriMesh tip = make_probe_collision(GetParam());
     const auto& c = node.extras.at("collision");
+    EXPECT_EQ(c.at("pieces").get<size_t>(), make_probe_collision_pieces(GetParam()).size());
     ASSERT_EQ(c.at("vertices_m").size(), tip.vertices.size());
     ASSERT_EQ(c.at("triangles").size(), tip.triangles.size());
     for (size_t i = 0; i < tip.vertices.size(); ++i)

@@ -5,7 +5,8 @@
 // the charted height, a flat bottom) kept on its side of the planes halfway to the neighbours, the
 // collars of a jaw joined with a rounded seam (which fills the embrasures with papillae), then, for
 // each tooth, the pocket cut out of it: the space between the tooth's outline and the inner wall of
-// the gingiva, from the margin down to the charted floor. The inner wall stands where a straight
+// the gingiva, from the margin down to the floor: the onset of the site tissue's yielding layer,
+// depth_at(0.25 N) above the charted floor (docs/tissue.md). The inner wall stands where a straight
 // probe held parallel to the long axis just clears the tooth near the margin, widened at each site
 // so the probe clears the whole crown there. Furcations of grade 2 and more open a tunnel between
 // the roots.
@@ -41,11 +42,14 @@ constexpr double kUnionRounding = 0.5e-3;     // papillae: seam between neighbou
 constexpr double kBelowApex = 1.5e-3;         // the gingiva block ends this far below the longest root
 constexpr double kThickeningDepth = 5e-3;     // the outer surface leans out down to this depth
 constexpr double kHullInset = 0.05e-3;        // the pocket starts this far inside the tooth outline
-constexpr double kCrestBelowFloor = 1.5e-3;   // alveolar crest below the pocket floor
+constexpr double kCrestBelowFloor = 1.5e-3;   // alveolar crest below the charted pocket floor
 constexpr double kBoneInset = 0.8e-3;         // bone surface inside the gingiva's outer surface
 constexpr double kLigament = 0.2e-3;          // periodontal ligament space around the root
-constexpr double kNearMargin = 0.5e-3;
-constexpr double kMinPocket = 0.2e-3;         // the floor stays at least this far below the margin        // the inner wall clears the tooth up to this above the margin
+constexpr double kNearMargin = 0.5e-3;        // the inner wall clears the tooth up to this above the margin
+constexpr double kFloorHalfWidth = 0.6e-3;    // largest half-width of a floor layer along the pocket
+constexpr double kFloorLayerGap = 0.05e-3;    // kept between a floor layer and the next site's
+constexpr double kFloorLayerReach = 0.5e-3;   // how far a layer reaches past the probe into tooth and wall
+constexpr double kMinPocket = 0.2e-3;         // the floor stays at least this far below the margin
 constexpr double kSiteSearchStep = kPi / 180.0;
 constexpr int kSiteSearchSteps = 40;
 
@@ -234,7 +238,7 @@ double bone_field(const std::vector<ToothTables>& jaw, const Vec3& p) {
             continue;
         }
         double c = collar(t, l, p, kBoneInset);
-        c = std::max(c, l.p.y - (t.floor.at(l.theta) - kCrestBelowFloor));
+        c = std::max(c, l.p.y - (t.charted_floor.at(l.theta) - kCrestBelowFloor));
         f = smooth_min(f, c, kUnionRounding);
     }
     for (const ToothTables& t : jaw) {
@@ -383,14 +387,62 @@ struct Built {
     TriMesh fine;   // polygonized tooth, tooth frame
     TriMesh mesh;   // decimated
     std::array<double, 6> theta{}, probe_r{};
-    std::array<double, 6> margin{}, floor{};
+    // Heights (tooth frame) at each site: margin, onset of the yielding floor (the gingiva's
+    // floor), charted floor (tip at 0.25 N) and the tip at 0.5 N.
+    std::array<double, 6> margin{}, floor{}, rest{}, deep{};
+    std::array<Tissue, 6> tissue{};
 };
+
+// Each site's floor layer: a box under the probe's line with its flat top at the onset, reaching
+// past the probe into the tooth and the pocket wall (objects may overlap; the probe is never
+// there), along the pocket up to half way to the next site, and down past the gingiva's own floor.
+// Outward triangles in the case frame (mirrored placements too).
+void add_floor_layers(PatientCase& c, double probe_radius_m) {
+    for (SiteFrame& f : c.sites) {
+        double nearest = 1.0;
+        for (const SiteFrame& o : c.sites) {
+            if (&o == &f || (o.fdi / 10 <= 2) != (f.fdi / 10 <= 2)) continue;
+            nearest = std::min(nearest, glm::length(o.onset_point - f.onset_point));
+        }
+        f.floor_half_width_m = std::max(probe_radius_m + 0.05e-3, std::min(kFloorHalfWidth, 0.5 * nearest - kFloorLayerGap));
+        const Vec3 u = f.outward, y = f.axis, v = glm::normalize(glm::cross(y, u));
+        const double ru = probe_radius_m + kFloorLayerReach, rv = f.floor_half_width_m;
+        const double down = kFloorLayerDepth + 0.3e-3;
+        TriMesh box;
+        for (int k = 0; k < 8; ++k)
+            box.vertices.push_back(f.onset_point + ((k & 1) ? ru : -ru) * u + ((k & 2) ? rv : -rv) * v +
+                                   ((k & 4) ? 0.0 : -down) * y);
+        // Quads of the cube on corner bits (x = bit 0, y = bit 1, z = bit 2), outward for a
+        // right-handed (u, v, y).
+        const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+        for (const auto& q : quads) {
+            box.triangles.push_back({uint32_t(q[0]), uint32_t(q[1]), uint32_t(q[2])});
+            box.triangles.push_back({uint32_t(q[0]), uint32_t(q[2]), uint32_t(q[3])});
+        }
+        if (mesh_volume(box) < 0.0)
+            for (auto& t : box.triangles) std::swap(t[1], t[2]);
+        c.solids.push_back({"floor_" + std::to_string(f.fdi) + "_" + site_name(f.site), box});
+    }
+}
+
+json tissue_json(const Tissue& t) {
+    if (t.is_preset) return tissue_preset_name(t.preset);
+    json pts = json::array();
+    for (const auto& [force, depth] : t.custom.points_N_mm) pts.push_back({force, depth});
+    return {{"yield_curve_N_mm", pts}};
+}
 
 json site_json(const SiteFrame& f) {
     auto v = [](const Vec3& x) { return json::array({x.x, x.y, x.z}); };
     return {{"fdi", f.fdi}, {"site", site_name(f.site)}, {"theta_rad", f.theta_rad},
             {"margin_point", v(f.margin_point)}, {"floor_point", v(f.floor_point)}, {"axis", v(f.axis)},
-            {"outward", v(f.outward)}, {"pd_mm", f.pd_m * 1e3}, {"gm_mm", f.gm_m * 1e3}};
+            {"outward", v(f.outward)}, {"pd_mm", f.pd_m * 1e3}, {"gm_mm", f.gm_m * 1e3},
+            {"tissue", tissue_json(f.tissue)}, {"onset_point", v(f.onset_point)},
+            {"floor_half_width_m", f.floor_half_width_m},
+            // Margin to tip along the axis at 0.25 N, and how much further it goes at 0.5 N.
+            {"depth_at_0_25_N_mm", f.rest_depth_m * 1e3},
+            {"extra_depth_at_0_5_N_mm",
+             f.tissue.curve().depth_mm_at(kFirmProbeForce_N) - f.tissue.curve().depth_mm_at(kRestingProbeForce_N)}};
 }
 
 // The visual asset: each tooth as enamel and root surfaces (split at the CEJ), gingiva and bone.
@@ -419,11 +471,18 @@ void fill_case_asset(PatientCase& c, const std::vector<Built>& built) {
     for (const auto& [name, mesh] : c.solids) {
         if (name.rfind("tooth_", 0) == 0) continue;
         AssetNode node;
-        const bool gum = name.rfind("gingiva_", 0) == 0;
         node.name = name;
         std::replace(node.name.begin(), node.name.end(), '_', ' ');
-        node.parts.push_back(MeshPart{mesh, gum ? kMaterialGingiva : kMaterialBone});
-        node.extras = {{"tissue", gum ? "gingiva" : "bone"}, {"jaw", name.substr(name.find('_') + 1)}};
+        if (name.rfind("floor_", 0) == 0) {
+            // A site's yielding floor layer: "floor_<fdi>_<site>".
+            const int fdi = std::stoi(name.substr(6, 2));
+            node.parts.push_back(MeshPart{mesh, kMaterialGingiva});
+            node.extras = {{"tissue", "floor"}, {"fdi", fdi}, {"site", name.substr(9)}};
+        } else {
+            const bool gum = name.rfind("gingiva_", 0) == 0;
+            node.parts.push_back(MeshPart{mesh, gum ? kMaterialGingiva : kMaterialBone});
+            node.extras = {{"tissue", gum ? "gingiva" : "bone"}, {"jaw", name.substr(name.find('_') + 1)}};
+        }
         a.nodes.push_back(node);
     }
 }
@@ -511,18 +570,28 @@ PatientCase build_case(const Chart& chart, const CaseSettings& cs) {
             const size_t i = size_t(s);
             gm[i] = rec.sites[i]->gm_mm * 1e-3;
             pd[i] = rec.sites[i]->pd_mm * 1e-3;
+            b.tissue[i] = site_tissue(*rec.sites[i]);
+            // The gingiva's floor is where the yielding layer starts: the tip sinks depth_at(0.25 N)
+            // into it to rest at the charted depth, and depth_at(0.5 N) at a firm push.
+            const YieldCurve& curve = b.tissue[i].curve();
+            const double onset_depth = std::max(pd[i] - curve.depth_m_at(kRestingProbeForce_N), kMinPocket);
+            const double rest_depth = onset_depth + curve.depth_m_at(kRestingProbeForce_N);
+            const double deep_depth = onset_depth + curve.depth_m_at(kFirmProbeForce_N);
             double theta = shape.site_angle(s);
             const double target = site_target_angle(s);
             bool clear = false;
             for (int step = 0; step <= kSiteSearchSteps; ++step) {
                 const double ym = shape.cej_height(theta) + gm[i];
-                const double yf = ym - pd[i];
-                const double rp = line_clearance(outline, theta, yf, 1.0, probe_clear);
-                if (line_clear_of(neighbours, rp, theta, yf, probe_clear)) {
+                // The probe's line clears the tooth and its neighbours down to the firm push.
+                const double yd = ym - deep_depth;
+                const double rp = line_clearance(outline, theta, yd, 1.0, probe_clear);
+                if (line_clear_of(neighbours, rp, theta, yd, probe_clear)) {
                     b.theta[i] = theta;
                     b.probe_r[i] = rp;
                     b.margin[i] = ym;
-                    b.floor[i] = yf;
+                    b.floor[i] = ym - onset_depth;
+                    b.rest[i] = ym - rest_depth;
+                    b.deep[i] = yd;
                     clear = true;
                     break;
                 }
@@ -543,7 +612,10 @@ PatientCase build_case(const Chart& chart, const CaseSettings& cs) {
             const double th = angle_of(i);
             const double ym = shape.cej_height(th) + cd::site_interpolate(b.theta, gm, th);
             t.margin.v[size_t(i)] = ym;
-            t.floor.v[size_t(i)] = std::min(cd::site_interpolate(b.theta, b.floor, th), ym - kMinPocket);
+            // The gingiva's own floor lies under the sites' yielding layers (add_floor_layers).
+            const double onset = std::min(cd::site_interpolate(b.theta, b.floor, th), ym - kMinPocket);
+            t.floor.v[size_t(i)] = onset - kFloorLayerDepth;
+            t.charted_floor.v[size_t(i)] = std::min(cd::site_interpolate(b.theta, b.rest, th), onset);
         }
 
         // Inner wall: clear of the tooth near the margin everywhere, and of the whole crown at the
@@ -551,7 +623,7 @@ PatientCase build_case(const Chart& chart, const CaseSettings& cs) {
         // The probe widens up its working end: the wall clears it at its widest within the pocket
         // (around as well as outward), the tip therefore with a little more room at depth.
         double deepest = 0.0;
-        for (size_t i = 0; i < 6; ++i) deepest = std::max(deepest, b.margin[i] - b.floor[i]);
+        for (size_t i = 0; i < 6; ++i) deepest = std::max(deepest, b.margin[i] - b.deep[i]);
         const double wall_clear = probe_clear.at(deepest + kNearMargin) - cs.tooth_clearance_m + cs.wall_clearance_m;
         for (int i = 0; i < cd::kAngles; ++i) {
             const double th = angle_of(i);
@@ -631,7 +703,10 @@ PatientCase build_case(const Chart& chart, const CaseSettings& cs) {
             f.theta_rad = b.theta[i];
             const Vec3 radial(std::cos(b.theta[i]), 0.0, std::sin(b.theta[i]));
             f.margin_point = pl.to_case(radial * b.probe_r[i] + Vec3(0.0, b.margin[i], 0.0));
-            f.floor_point = pl.to_case(radial * b.probe_r[i] + Vec3(0.0, b.floor[i], 0.0));
+            f.floor_point = pl.to_case(radial * b.probe_r[i] + Vec3(0.0, b.margin[i] - chart.teeth.at(pl.fdi).sites[i]->pd_mm * 1e-3, 0.0));
+            f.onset_point = pl.to_case(radial * b.probe_r[i] + Vec3(0.0, b.floor[i], 0.0));
+            f.rest_depth_m = b.margin[i] - b.rest[i];
+            f.tissue = b.tissue[i];
             f.axis = pl.to_case_direction(Vec3(0.0, 1.0, 0.0));
             f.outward = pl.to_case_direction(radial);
             f.pd_m = chart.teeth.at(pl.fdi).sites[i]->pd_mm * 1e-3;
@@ -676,6 +751,7 @@ PatientCase build_case(const Chart& chart, const CaseSettings& cs) {
             out.solids.push_back({"bone_" + name, bone});
         }
     }
+    add_floor_layers(out, cs.probe_radius_m);
     fill_case_asset(out, built);
     return out;
 }
@@ -721,7 +797,7 @@ Quat probe_orientation(const SiteFrame& s) {
 
 }  // namespace
 
-Trajectory probing_trajectory(const PatientCase& c, double insert_speed, double overshoot) {
+Trajectory probing_trajectory(const PatientCase& c, double insert_speed, double stiffness, double force) {
     Trajectory tr;
     double t = 0.0;
     Pose last;
@@ -751,12 +827,16 @@ Trajectory probing_trajectory(const PatientCase& c, double insert_speed, double 
             const double margin_y = pl.to_tooth(f.margin_point).y;
             const Vec3 top = f.margin_point + f.axis * (crown_top + kLiftAboveCrowns - margin_y);
             const Vec3 entry = f.margin_point + f.axis * kEntryAboveMargin;
-            const Vec3 bottom = f.floor_point - f.axis * overshoot;
+            // Where the graphic tip rests at `force` (the onset plus the tissue's depth), plus the
+            // coupling's stretch force / K and a margin: the force would just pass `force` there.
+            const double rest = glm::dot(f.margin_point - f.onset_point, f.axis) + f.tissue.curve().depth_m_at(force);
+            const double past = rest + force / stiffness + kProbeOvershootMargin_m - f.pd_m;
+            const Vec3 bottom = f.floor_point - f.axis * past;
             go(Pose{top, q}, kTransferSpeed);
             go(Pose{entry, q}, kTransferSpeed);
-            ProbingPass pass{pl.fdi, s, t, 0.0, 0.0};
+            ProbingPass pass{pl.fdi, s, t, 0.0, 0.0, past};
             go(Pose{bottom, q}, insert_speed);
-            pass.t_floor = t - overshoot / insert_speed;
+            pass.t_floor = t - past / insert_speed;
             tr.samples.push_back({t + kHoldSeconds, Pose{bottom, q}});
             t += kHoldSeconds;
             go(Pose{entry, q}, kTransferSpeed);

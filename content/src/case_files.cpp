@@ -4,6 +4,7 @@
 #include "sulcus/content/gltf_io.h"
 #include "sulcus/engine/runner.h"
 
+#include <algorithm>
 #include <charconv>
 #include <filesystem>
 #include <system_error>
@@ -33,11 +34,51 @@ std::string trajectory_csv(const Trajectory& tr) {
 }
 
 std::string obj_text(const TriMesh& m) {
-    std::string s = "# probe collision tip, probe frame (tip end at the origin, +Y toward the handle), metres\n";
+    std::string s = "# probe collision: closed convex pieces (one per connected component), probe frame\n"
+                    "# (tip end at the origin, +Y toward the handle), metres\n";
     for (const Vec3& v : m.vertices) s += "v " + exact(v.x) + " " + exact(v.y) + " " + exact(v.z) + "\n";
     for (const auto& t : m.triangles)
         s += "f " + std::to_string(t[0] + 1) + " " + std::to_string(t[1] + 1) + " " + std::to_string(t[2] + 1) + "\n";
     return s;
+}
+
+
+json curve_json(const YieldCurve& c) {
+    json pts = json::array();
+    for (const auto& [force, depth] : c.points_N_mm) pts.push_back({force, depth});
+    return pts;
+}
+
+// The scene's materials (docs/tissue.md): rigid teeth, the gingiva's compliant wall, and one
+// yielding floor per distinct tissue curve of the case. `floor_material` receives the material of
+// every site, in the order of c.sites.
+json scene_materials(const PatientCase& c, std::vector<std::string>& floor_material) {
+    json m = {{"tooth", {{"kind", "rigid"}, {"friction_static", kToothFrictionStatic}, {"friction_kinetic", kToothFrictionKinetic}}},
+              {"gingiva",
+               {{"kind", "compliant"},
+                {"stiffness_N_per_m", kGingivaStiffness_N_per_m},
+                {"friction_static", kTissueFrictionStatic},
+                {"friction_kinetic", kTissueFrictionKinetic}}}};
+    std::vector<std::pair<YieldCurve, std::string>> used;
+    int customs = 0;
+    for (const SiteFrame& f : c.sites) {
+        const YieldCurve& curve = f.tissue.curve();
+        auto it = std::find_if(used.begin(), used.end(), [&](const auto& u) { return u.first == curve; });
+        if (it == used.end()) {
+            std::string name;
+            for (TissuePreset p : kAllTissuePresets)
+                if (tissue_preset_curve(p) == curve) name = std::string("floor_") + tissue_preset_name(p);
+            if (name.empty()) name = "floor_custom_" + std::to_string(++customs);
+            used.push_back({curve, name});
+            m[name] = {{"kind", "compliant"},
+                       {"yield_curve_N_mm", curve_json(curve)},
+                       {"friction_static", kTissueFrictionStatic},
+                       {"friction_kinetic", kTissueFrictionKinetic}};
+            it = used.end() - 1;
+        }
+        floor_material.push_back(it->second);
+    }
+    return m;
 }
 
 }  // namespace
@@ -52,6 +93,9 @@ std::string write_case(const PatientCase& c, ProbeKind probe, const std::string&
         if (!write_file_atomic((fs::path(dir) / name).string(), text, &error) && error.empty())
             error = (fs::path(dir) / name).string() + ": cannot write";
     };
+
+    std::vector<std::string> floor_material;
+    const json materials = scene_materials(c, floor_material);
 
     // One glTF per solid of the scene (teeth and gingiva); the bone only in case.glb.
     json objects = json::array();
@@ -68,21 +112,37 @@ std::string write_case(const PatientCase& c, ProbeKind probe, const std::string&
         if (!why.empty()) return why;
         std::string name = node.name;
         std::replace(name.begin(), name.end(), ' ', '_');
-        objects.push_back({{"name", name}, {"mesh", file}});
+        json object = {{"name", name}, {"mesh", file}};
+        const std::string tissue = node.extras.value("tissue", "");
+        if (tissue == "gingiva") {
+            object["material"] = "gingiva";
+        } else if (tissue == "floor") {
+            // The site's yielding layer in its tissue's material.
+            std::string material = "gingiva";
+            for (size_t i = 0; i < c.sites.size(); ++i)
+                if (c.sites[i].fdi == node.extras.value("fdi", 0) && site_name(c.sites[i].site) == node.extras.value("site", ""))
+                    material = floor_material[i];
+            object["material"] = material;
+        } else {
+            object["material"] = "tooth";
+        }
+        objects.push_back(object);
     }
 
-    const TriMesh tip = make_probe_tip_collision(probe);
-    const std::string tool_file = std::string("probe_") + probe_kind_name(probe) + "_tip.obj";
-    put(tool_file, obj_text(tip));
+    const TriMesh tool = make_probe_collision(probe);
+    const std::string tool_file = std::string("probe_") + probe_kind_name(probe) + ".obj";
+    put(tool_file, obj_text(tool));
 
-    const Trajectory tr = probing_trajectory(c);
+    const double stiffness_N_per_m = 1000.0;
+    const Trajectory tr = probing_trajectory(c, 6e-3, stiffness_N_per_m, kFirmProbeForce_N);
     put("probing.csv", trajectory_csv(tr));
 
     const json scene = {{"format", "sulcus.scene/1"},
+                        {"materials", materials},
                         {"objects", objects},
                         {"tool", {{"name", std::string("probe_") + probe_kind_name(probe)}, {"mesh", tool_file}}},
                         {"haptic",
-                         {{"stiffness_N_per_m", 1000.0},
+                         {{"stiffness_N_per_m", stiffness_N_per_m},
                           {"rotational_stiffness_Nm_per_rad", 0.03},
                           {"weight_translational", 1.0},
                           {"weight_rotational", 1e-4}}},
@@ -94,7 +154,7 @@ std::string write_case(const PatientCase& c, ProbeKind probe, const std::string&
     json passes = json::array();
     for (const ProbingPass& p : tr.passes)
         passes.push_back({{"fdi", p.fdi}, {"site", site_name(p.site)}, {"t_start", p.t_start},
-                          {"t_floor", p.t_floor}, {"t_end", p.t_end}});
+                          {"t_floor", p.t_floor}, {"t_end", p.t_end}, {"past_floor_mm", p.past_floor_m * 1e3}});
     json manifest = {{"format", "sulcus.case/1"},
                      {"chart", "chart.json"},
                      {"scene", "scene.json"},

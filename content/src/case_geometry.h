@@ -31,7 +31,8 @@ struct ToothTables {
     ToothPlacement placement;
     const ToothShape* shape = nullptr;
     AngleTable margin;   // y of the gingival margin
-    AngleTable floor;    // y of the pocket floor
+    AngleTable floor;    // y of the pocket floor: the onset of the yielding layer
+    AngleTable charted_floor;  // y of the charted floor (the tip at 0.25 N); the bone's reference
     AngleTable slot;     // radius of the inner wall of the gingiva along the pocket
     AngleTable outer;    // radius of the outer gingival surface at the margin
     // Convex hull of the tooth's cross-section: radius by (height, angle).

@@ -63,13 +63,62 @@ void read_flag(const Reporter& r, const json& obj, const char* key, const std::s
     *out = it->get<bool>();
 }
 
+// "tissue": "healthy" | "inflamed" | {"yield_curve_N_mm": [[force N, depth mm], ...]}.
+void read_tissue(const Reporter& r, const json& obj, const std::string& place, std::optional<Tissue>* out) {
+    const auto it = obj.find("tissue");
+    if (it == obj.end()) return;
+    const std::string here = place + "/tissue";
+    const char* expected = "expected \"healthy\", \"inflamed\" or {\"yield_curve_N_mm\": [[force N, depth mm], ...]}";
+    if (it->is_string()) {
+        TissuePreset p;
+        if (!parse_tissue_preset(it->get<std::string>(), &p)) {
+            r.error(here, "unknown tissue " + shown(it->get<std::string>()) + " (" + expected + ")");
+            return;
+        }
+        *out = Tissue::of(p);
+        return;
+    }
+    if (!it->is_object()) {
+        r.error(here, std::string(expected) + ", found " + shown(it->dump()));
+        return;
+    }
+    for (auto k = it->begin(); k != it->end(); ++k)
+        if (k.key() != "yield_curve_N_mm") r.warning(here + "/" + pointer_token(k.key()), "unknown key (ignored)");
+    const auto c = it->find("yield_curve_N_mm");
+    const std::string cplace = here + "/yield_curve_N_mm";
+    if (c == it->end()) {
+        r.error(cplace, "missing");
+        return;
+    }
+    if (!c->is_array()) {
+        r.error(cplace, "expected an array of [force N, depth mm] points, found " + shown(c->dump()));
+        return;
+    }
+    YieldCurve curve;
+    for (size_t i = 0; i < c->size(); ++i) {
+        const json& pt = (*c)[i];
+        if (!pt.is_array() || pt.size() != 2 || !pt[0].is_number() || !pt[1].is_number()) {
+            r.error(cplace + "/" + std::to_string(i), "expected [force N, depth mm], found " + shown(pt.dump()));
+            return;
+        }
+        curve.points_N_mm.push_back({pt[0].get<double>(), pt[1].get<double>()});
+    }
+    int bad = -1;
+    const std::string why = validate_yield_curve(curve, &bad);
+    if (!why.empty()) {
+        r.error(bad >= 0 ? cplace + "/" + std::to_string(bad) : cplace, why);
+        return;
+    }
+    *out = Tissue::of(curve);
+}
+
 void read_site(const Reporter& r, const json& v, const std::string& place, SiteRecord* site) {
     if (!v.is_object()) {
         r.error(place, "expected an object with pd_mm");
         return;
     }
     for (auto it = v.begin(); it != v.end(); ++it) {
-        static const char* known[] = {"pd_mm", "gm_mm", "bop", "suppuration", "plaque", "calculus"};
+        static const char* known[] = {"pd_mm", "gm_mm", "bop", "suppuration", "plaque", "calculus", "tissue"};
         if (std::find_if(std::begin(known), std::end(known), [&](const char* k) { return it.key() == k; }) ==
             std::end(known))
             r.warning(place + "/" + pointer_token(it.key()), "unknown key (ignored)");
@@ -80,6 +129,7 @@ void read_site(const Reporter& r, const json& v, const std::string& place, SiteR
     read_flag(r, v, "suppuration", place, &site->suppuration);
     read_flag(r, v, "plaque", place, &site->plaque);
     read_flag(r, v, "calculus", place, &site->calculus);
+    read_tissue(r, v, place, &site->tissue);
 }
 
 void read_tooth(const Reporter& r, const json& v, const std::string& place, ToothRecord* tooth) {
@@ -144,6 +194,11 @@ void read_tooth(const Reporter& r, const json& v, const std::string& place, Toot
 }
 
 }  // namespace
+
+Tissue site_tissue(const SiteRecord& site) {
+    if (site.tissue) return *site.tissue;
+    return Tissue::of(site.bop ? TissuePreset::Inflamed : TissuePreset::Healthy);
+}
 
 const char* furcation_side_name(FurcationSide s) {
     switch (s) {
@@ -236,6 +291,15 @@ json chart_to_json(const Chart& chart) {
             if (rec->suppuration) j["suppuration"] = true;
             if (rec->plaque) j["plaque"] = true;
             if (rec->calculus) j["calculus"] = true;
+            if (rec->tissue) {
+                if (rec->tissue->is_preset) {
+                    j["tissue"] = tissue_preset_name(rec->tissue->preset);
+                } else {
+                    json pts = json::array();
+                    for (const auto& [f, d] : rec->tissue->custom.points_N_mm) pts.push_back({f, d});
+                    j["tissue"] = {{"yield_curve_N_mm", pts}};
+                }
+            }
             sites[site_name(s)] = j;
         }
         json t = {{"sites", sites}};

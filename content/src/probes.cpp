@@ -27,6 +27,21 @@ constexpr double kMarkDepth_m = 0.02 * kMm;   // marks reach this far inside the
 constexpr double kArcStep_m = 0.25 * kMm;     // ring spacing along the Nabers arc
 constexpr double kBendStep_rad = 5.0 * kDeg;  // ring spacing along shank bends
 
+// Collision pieces beyond the tip follow the drawn body this closely: the polygon of a piece's
+// rings (a subset of the body's 48 azimuths) within kPieceRadialTol_m of the circle, and the chord
+// of a curved piece within kPieceChordTol_m of the arc on either side.
+constexpr double kPieceRadialTol_m = 0.02 * kMm;
+constexpr double kPieceChordTol_m = 0.025 * kMm;
+
+// The handle's rings: (distance along the handle axis from the shank's end, radius), mm. The
+// ferrule is a smooth cone in two frustums (together not convex: it flares), the grip a faceted
+// prism with chamfered ends (convex).
+struct HandleRing {
+    double a_mm, r_mm;
+};
+constexpr HandleRing kFerrule[] = {{-1.0, 0.7}, {10.0, 2.4}, {13.0, 3.3}};
+constexpr HandleRing kGrip[] = {{12.5, 3.2}, {14.0, 4.0}, {112.0, 4.0}, {113.5, 3.2}};
+
 // The centreline is a chain of pieces in the XY plane, starting at the origin heading +Y.
 // Heading psi: tangent = (-sin psi, cos psi, 0); kappa > 0 turns toward -X.
 struct Piece {
@@ -462,6 +477,36 @@ Vec3 probe_centreline(const ProbeSpec& spec, double u_m, Vec3* tangent) {
 
 double probe_body_radius(const ProbeSpec& spec, double u_m) { return radius_at(geometry(spec.kind), u_m); }
 
+namespace {
+
+// Fewest sides, a divisor of the body's 48 (same azimuths), whose polygon stays within
+// kPieceRadialTol_m of a circle of radius r.
+int piece_sides(double r) {
+    for (int n : {12, 16, 24}) {
+        if (r * (1.0 - std::cos(std::numbers::pi / n)) <= kPieceRadialTol_m) return n;
+    }
+    return kBodySides;
+}
+
+// A convex piece: the hull of some rings, each with `sides` vertices on the body's azimuths.
+TriMesh ring_hull(const std::vector<Ring>& rings, int sides) {
+    std::vector<Vec3> pts;
+    for (const Ring& r : rings)
+        for (int j = 0; j < sides; ++j) pts.push_back(ring_point(r, j, sides));
+    return convex_hull(pts, 1e-14);
+}
+
+// Handle rings in the probe frame, around the axis leaving the shank's end.
+std::vector<Ring> handle_rings(const Geometry& g, const HandleRing* from, const HandleRing* to) {
+    Vec3 t_h;
+    const Vec3 e = centre_at(g, g.path_length, &t_h);
+    std::vector<Ring> out;
+    for (const HandleRing* h = from; h != to; ++h) out.push_back({e + (h->a_mm * kMm) * t_h, t_h, h->r_mm * kMm});
+    return out;
+}
+
+}  // namespace
+
 TriMesh make_probe_tip_collision(ProbeKind kind) {
     const ProbeSpec& spec = probe_spec(kind);
     const Geometry& g = geometry(kind);
@@ -497,6 +542,48 @@ TriMesh make_probe_tip_collision(ProbeKind kind) {
     return convex_hull(pts, 1e-14);
 }
 
+std::vector<TriMesh> make_probe_collision_pieces(ProbeKind kind) {
+    const ProbeSpec& spec = probe_spec(kind);
+    const Geometry& g = geometry(kind);
+    std::vector<TriMesh> pieces = {make_probe_tip_collision(kind)};
+    // The rest of the working end and the shank, path piece by path piece from the tip piece's end:
+    // a frustum per straight run; a curve cut into pieces short enough that the chord between two
+    // rings stays within kPieceChordTol_m of the arc on its outer (and inner) side.
+    double at = 0.0;
+    for (const Piece& p : g.path) {
+        const double lo = std::max(at, spec.collision_length_m), hi = at + p.length_m;
+        at = hi;
+        if (hi <= lo + 1e-12) continue;
+        const double r_max = std::max(radius_at(g, lo), radius_at(g, hi));
+        int n = 1;
+        if (p.kappa_per_m != 0.0) {
+            const double bend_r = 1.0 / std::abs(p.kappa_per_m);
+            const double half = std::acos(1.0 - kPieceChordTol_m / (bend_r + r_max));
+            n = std::max(1, int(std::ceil((hi - lo) * std::abs(p.kappa_per_m) / (2.0 * half) - 1e-9)));
+        }
+        const int sides = piece_sides(r_max);
+        for (int k = 0; k < n; ++k)
+            pieces.push_back(ring_hull({ring_at(g, lo + (hi - lo) * k / n), ring_at(g, lo + (hi - lo) * (k + 1) / n)}, sides));
+    }
+    // The handle: the ferrule's two frustums and the grip on the drawn grip's own facets.
+    for (int k = 0; k + 1 < int(std::size(kFerrule)); ++k) {
+        const std::vector<Ring> rings = handle_rings(g, &kFerrule[k], &kFerrule[k + 2]);
+        pieces.push_back(ring_hull(rings, piece_sides(std::max(rings[0].radius, rings[1].radius))));
+    }
+    pieces.push_back(ring_hull(handle_rings(g, std::begin(kGrip), std::end(kGrip)), kGripSides));
+    return pieces;
+}
+
+TriMesh make_probe_collision(ProbeKind kind) {
+    TriMesh all;
+    for (const TriMesh& piece : make_probe_collision_pieces(kind)) {
+        const auto base = uint32_t(all.vertices.size());
+        all.vertices.insert(all.vertices.end(), piece.vertices.begin(), piece.vertices.end());
+        for (const auto& t : piece.triangles) all.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    }
+    return all;
+}
+
 AssetNode make_probe_node(ProbeKind kind, Asset& asset) {
     const ProbeSpec& spec = probe_spec(kind);
     const Geometry& g = geometry(kind);
@@ -514,16 +601,9 @@ AssetNode make_probe_node(ProbeKind kind, Asset& asset) {
     node.parts.push_back(std::move(body));
 
     // Handle along the shank's final direction: a smooth ferrule cone, then a faceted grip.
-    Vec3 t_h;
-    const Vec3 e = centre_at(g, g.path_length, &t_h);
-    auto handle_rings = [&](std::initializer_list<std::array<double, 2>> profile_mm) {
-        std::vector<Ring> out;
-        for (const auto& [a, r] : profile_mm) out.push_back({e + (a * kMm) * t_h, t_h, r * kMm});
-        return out;
-    };
     MeshPart handle;
-    add_tube(handle.mesh, handle_rings({{-1.0, 0.7}, {10.0, 2.4}, {13.0, 3.3}}), kBodySides);
-    add_tube(handle.mesh, handle_rings({{12.5, 3.2}, {14.0, 4.0}, {112.0, 4.0}, {113.5, 3.2}}), kGripSides);
+    add_tube(handle.mesh, handle_rings(g, std::begin(kFerrule), std::end(kFerrule)), kBodySides);
+    add_tube(handle.mesh, handle_rings(g, std::begin(kGrip), std::end(kGrip)), kGripSides);
     handle.material = add_material(asset, mats[kProbeHandle]);
     node.parts.push_back(std::move(handle));
 
@@ -549,10 +629,13 @@ AssetNode make_probe_node(ProbeKind kind, Asset& asset) {
 
     nlohmann::json marks_mm = nlohmann::json::array();
     for (double v : spec.graduations_m) marks_mm.push_back(v / kMm);
-    const TriMesh collision = make_probe_tip_collision(kind);
-    nlohmann::json coll = mesh_json(collision);
-    coll["shape"] = spec.curve_radius_m == 0.0 ? "tip sphere cap and tangent frustum"
-                                                : "convex hull of the distal curved working end";
+    const std::vector<TriMesh> pieces = make_probe_collision_pieces(kind);
+    nlohmann::json coll = mesh_json(make_probe_collision(kind));
+    coll["shape"] = "convex pieces (connected components): the working tip, the rest of the working end, the shank "
+                    "and the handle";
+    coll["pieces"] = pieces.size();
+    coll["tip"] = spec.curve_radius_m == 0.0 ? "tip sphere cap and tangent frustum"
+                                              : "convex hull of the distal curved working end";
     coll["length_m"] = spec.collision_length_m;
     node.extras = {{"probe", probe_kind_name(kind)},
                    {"display_name", spec.display_name},

@@ -28,8 +28,9 @@ const char* const kHelpContent =
     "        the arch, gingiva and bone shaped from the chart, and writes DIR/scene.json (runnable\n"
     "        by 'sulcus-cli run'), one .glb per tooth and gingiva, case.glb (everything, with the\n"
     "        chart and site frames as metadata), probing.csv (the probe inserted at every site),\n"
-    "        case.json (sites and probing passes) and chart.json. KIND: williams (default), unc15,\n"
-    "        cpi, marquis, nabers.\n"
+    "        case.json (sites, their floor tissue and probing passes) and chart.json. Each site's\n"
+    "        floor yields as its tissue says (docs/tissue.md: 'tissue' in the chart, else inflamed\n"
+    "        where it bleeds, healthy where not). KIND: williams (default), unc15, cpi, marquis, nabers.\n"
     "  tooth FDI --out FILE.glb [--collision]\n"
     "        writes one procedural tooth (11-17, 21-27, 31-37, 41-47) in its tooth frame; the\n"
     "        visual resolution by default, the collision resolution with --collision\n"
@@ -165,8 +166,10 @@ int cmd_probe(const Options& o) {
     asset.nodes.push_back(make_probe_node(kind, asset));
     AssetNode tip;
     tip.name = std::string("probe ") + probe_kind_name(kind) + " collision";
-    tip.parts.push_back(MeshPart{make_probe_tip_collision(kind), -1});
-    tip.extras = {{"collision", true}, {"frame", "probe: tip end at the origin, +Y toward the handle"}};
+    tip.parts.push_back(MeshPart{make_probe_collision(kind), -1});
+    tip.extras = {{"collision", true},
+                  {"pieces", make_probe_collision_pieces(kind).size()},
+                  {"frame", "probe: tip end at the origin, +Y toward the handle"}};
     asset.nodes.push_back(tip);
     asset.extras = {{"format", "sulcus.probe/1"}, {"probe", probe_kind_name(kind)}};
     const std::string why = write_glb(asset, o.out);

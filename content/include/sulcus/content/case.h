@@ -13,6 +13,7 @@
 #include "sulcus/content/asset.h"
 #include "sulcus/content/chart.h"
 #include "sulcus/content/probes.h"
+#include "sulcus/content/tissue.h"
 #include "sulcus/content/tooth.h"
 
 #include <array>
@@ -43,10 +44,21 @@ struct SiteFrame {
     Site site = Site::B;
     double theta_rad = 0.0;   // polar angle of the site in the tooth frame
     Vec3 margin_point;        // probe axis at the gingival margin
-    Vec3 floor_point;         // probe axis at the pocket floor: where the tip end rests
+    Vec3 floor_point;         // probe axis at the charted pocket floor (pd below the margin): where
+                              // the tip end rests at 0.25 N
     Vec3 axis;                // unit, the tooth's long axis toward occlusal (insertion is -axis)
     Vec3 outward;             // unit, horizontal, away from the tooth
     double pd_m = 0.0, gm_m = 0.0;
+    // The floor's tissue (chart, or by bleeding: site_tissue) and where its yielding layer starts:
+    // the gingiva's floor surface, depth_at(0.25 N) above the charted floor on the probe axis
+    // (docs/cases.md; never less than 0.2 mm below the margin, so a pocket shallower than that
+    // plus depth_at(0.25 N) rests deeper than charted: see rest_depth_m).
+    Tissue tissue;
+    Vec3 onset_point;
+    double rest_depth_m = 0.0;          // margin to the tip end at 0.25 N along the axis (= pd_m)
+    // The yielding layer is a block of its own under the site (a scene object in the tissue's
+    // material, docs/cases.md): its flat top at the onset, this far either way along the pocket.
+    double floor_half_width_m = 0.0;
 };
 
 struct CaseSettings {
@@ -91,20 +103,35 @@ PatientCase build_case(const Chart& chart, const CaseSettings& settings = {});
 
 // The probing trajectory of a case: for every tooth and site, the probe (tip end at the probe
 // frame origin, +Y toward the handle) comes down the site's line from above the crowns at
-// `insert_speed_m_per_s`, goes `overshoot_m` below the floor, holds, and leaves upward.
+// `insert_speed_m_per_s`, goes on until the force would reach `force_N` (the haptic tip
+// force_N / stiffness past where the graphic tip then rests, onset + depth_at(force_N), plus
+// kProbeOvershootMargin_m), holds, and leaves upward (docs/cases.md).
 struct ProbingPass {
     int fdi;
     Site site;
-    double t_start, t_floor, t_end;  // seconds: descent start, haptic tip at the floor, back up
+    double t_start, t_floor, t_end;  // seconds: descent start, haptic tip at the charted floor, back up
+    double past_floor_m;             // how far the haptic tip goes past the charted floor
 };
 struct Trajectory {
     std::vector<std::pair<double, Pose>> samples;  // (t, haptic pose)
     std::vector<ProbingPass> passes;
 };
-Trajectory probing_trajectory(const PatientCase& c, double insert_speed_m_per_s = 6e-3, double overshoot_m = 0.4e-3);
+inline constexpr double kProbeOvershootMargin_m = 0.1e-3;
+Trajectory probing_trajectory(const PatientCase& c, double insert_speed_m_per_s = 6e-3,
+                              double stiffness_N_per_m = 1000.0, double force_N = kFirmProbeForce_N);
+
+// Materials of the case's scene (docs/tissue.md): the teeth and the gingiva's wall.
+inline constexpr double kGingivaStiffness_N_per_m = 400.0;
+inline constexpr double kToothFrictionStatic = 0.15, kToothFrictionKinetic = 0.10;
+inline constexpr double kTissueFrictionStatic = 0.5, kTissueFrictionKinetic = 0.4;
+// The floor regions of the scene accept gingiva faces within this angle of the tooth axis.
+// The gingiva's own pocket floor lies this far below each site's yielding layer, so the tip meets
+// the layer's flat top alone (docs/cases.md).
+inline constexpr double kFloorLayerDepth = 2.0e-3;
 
 // Writes a runnable case into `dir` (created if missing): scene.json (sulcus.scene/1: one object per
-// tooth and gingiva, the probe's collision tip as the tool), one .glb per object, the tool as OBJ,
+// tooth and gingiva with their materials and one floor region per site, the probe's collision
+// (make_probe_collision) as the tool), one .glb per object, the tool as OBJ,
 // probing.csv (the trajectory), case.glb (every node with its metadata, and the probe), chart.json,
 // and case.json (sulcus.case/1: the sites and the probing passes). Returns "" or a one-line error.
 std::string write_case(const PatientCase& c, ProbeKind probe, const std::string& dir);

@@ -3,6 +3,7 @@
 // Authored (reference) and recorded (trainee) charts share this shape.
 #pragma once
 
+#include "sulcus/content/tissue.h"
 #include "sulcus/content/tooth.h"
 
 #include <nlohmann/json.hpp>
@@ -22,9 +23,15 @@ struct SiteRecord {
     bool suppuration = false;
     bool plaque = false;
     bool calculus = false;
+    // Tissue of the pocket floor as authored; absent = by bleeding (site_tissue).
+    std::optional<Tissue> tissue;
     double cal_mm() const { return pd_mm - gm_mm; }  // clinical attachment level
     bool operator==(const SiteRecord&) const = default;
 };
+
+// The floor tissue of a site: as authored, else "inflamed" when it bleeds on probing and
+// "healthy" when it does not.
+Tissue site_tissue(const SiteRecord& site);
 
 struct ToothRecord {
     int fdi = 0;

@@ -1,5 +1,6 @@
 // Periodontal probes as tools: the marking tables of the common probes (reference file §1.1-1.2,
-// docs/probes.md), a convex collision tip for the haptic step and a drawable body.
+// docs/probes.md), the collision shape for the haptic step (a convex working tip and convex pieces
+// for the rest of the probe) and a drawable body.
 //
 // Probe frame: origin at the end point of the tip (the most distal point of the rounded or ball
 // tip), +Y along the working end toward the handle, the shank bends (and the Nabers curve) in the
@@ -64,11 +65,21 @@ double probe_body_radius(const ProbeSpec& spec, double u_m);
 // the distal piece of the curved working end.
 TriMesh make_probe_tip_collision(ProbeKind kind);
 
+// The whole probe as a tool: closed, outward, convex pieces in the probe frame, each following the
+// drawn body within 0.05 mm: the working tip (make_probe_tip_collision) first, then the rest of
+// the working end (Nabers), the shank (a frustum per straight run, bends and curves as short
+// hulls) and the handle (the ferrule's two frustums, the grip). Pieces may overlap.
+std::vector<TriMesh> make_probe_collision_pieces(ProbeKind kind);
+// The pieces as one mesh whose connected components are the pieces, in that order (the scene's
+// tool, sulcus.scene/1).
+TriMesh make_probe_collision(ProbeKind kind);
+
 // Visual: one node "probe <kind>" with closed parts for the steel body (tip, working end, shank),
 // the handle (ferrule and grip) and the marks (one part per mark colour: rings a few micrometres
 // proud of the body); materials are added to `asset` (reused when an equal one of the same name is
 // there). Extras: "probe", "display_name", "tip_diameter_m", "ball_tip", "marks_mm" (graduations),
-// "bands_mm" ([from, to] of every drawn mark), "frame", "collision" (shape, length and the mesh).
+// "bands_mm" ([from, to] of every drawn mark), "frame", "collision" (make_probe_collision's mesh,
+// its piece count, the tip's shape and length).
 AssetNode make_probe_node(ProbeKind kind, Asset& asset);
 
 // Marks stand this far proud of the body surface (metres).
