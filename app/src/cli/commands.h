@@ -17,4 +17,7 @@ int usage(const std::string& msg);
 extern const char* const kHelpContent;
 int cmd_content(const std::vector<std::string>& args);
 
+extern const char* const kHelpTissue;
+int cmd_tissue(const std::vector<std::string>& args);
+
 }  // namespace sulcus::cli

@@ -32,6 +32,7 @@ const char* kHelpMain =
     "commands:\n"
     "  run SCENE.json [--out DIR] [--plot]   run a scene headless, one step per servo tick\n"
     "  content SUBCOMMAND ...                cases from charts, teeth, probes, checks, import\n"
+    "  tissue [--out DIR]                    force-depth curves of the pocket-floor tissues\n"
     "  help [COMMAND]                        show help for a command\n"
     "\n"
     "exit status: 0 done; 1 ran, but a requested check failed; 2 bad input or usage;\n"
@@ -107,6 +108,10 @@ int cmd_help(const std::vector<std::string>& args) {
         std::fputs(kHelpContent, stdout);
         return kOk;
     }
+    if (args[0] == "tissue") {
+        std::fputs(kHelpTissue, stdout);
+        return kOk;
+    }
     return usage("help: unknown command '" + args[0] + "'");
 }
 
@@ -122,6 +127,7 @@ int main(int argc, char** argv) {
         std::vector<std::string> args(argv + 2, argv + argc);
         if (cmd == "run") return cmd_run(args);
         if (cmd == "content") return cmd_content(args);
+        if (cmd == "tissue") return cmd_tissue(args);
         if (cmd == "help" || cmd == "--help" || cmd == "-h") return cmd_help(args);
         return usage("unknown command '" + cmd + "'");
     } catch (const std::exception& e) {
