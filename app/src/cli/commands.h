@@ -20,4 +20,7 @@ int cmd_content(const std::vector<std::string>& args);
 extern const char* const kHelpTissue;
 int cmd_tissue(const std::vector<std::string>& args);
 
+extern const char* const kHelpServo;
+int cmd_servo(const std::vector<std::string>& args);
+
 }  // namespace sulcus::cli

@@ -33,6 +33,8 @@ const char* kHelpMain =
     "  run SCENE.json [--out DIR] [--plot]   run a scene headless, one step per servo tick\n"
     "  content SUBCOMMAND ...                cases from charts, teeth, probes, checks, import\n"
     "  tissue [--out DIR]                    force-depth curves of the pocket-floor tissues\n"
+    "  servo --device sim [--scene FILE] [--seconds N] [--record FILE]\n"
+    "                                        the real-time servo loop with a device\n"
     "  help [COMMAND]                        show help for a command\n"
     "\n"
     "exit status: 0 done; 1 ran, but a requested check failed; 2 bad input or usage;\n"
@@ -112,6 +114,10 @@ int cmd_help(const std::vector<std::string>& args) {
         std::fputs(kHelpTissue, stdout);
         return kOk;
     }
+    if (args[0] == "servo") {
+        std::fputs(kHelpServo, stdout);
+        return kOk;
+    }
     return usage("help: unknown command '" + args[0] + "'");
 }
 
@@ -128,6 +134,7 @@ int main(int argc, char** argv) {
         if (cmd == "run") return cmd_run(args);
         if (cmd == "content") return cmd_content(args);
         if (cmd == "tissue") return cmd_tissue(args);
+        if (cmd == "servo") return cmd_servo(args);
         if (cmd == "help" || cmd == "--help" || cmd == "-h") return cmd_help(args);
         return usage("unknown command '" + cmd + "'");
     } catch (const std::exception& e) {

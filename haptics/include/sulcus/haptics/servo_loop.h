@@ -1,0 +1,196 @@
+// The servo loop: one thread ticking at a fixed rate (1 kHz by default) on absolute deadlines.
+// Each tick: device.read -> renderer step -> safety layer -> device.write -> recorder.add_tick,
+// then the tick's outcome is published to other threads through a seqlock. Nothing in a tick
+// allocates, locks or does I/O: buffers are sized at start(), statistics live in fixed arrays,
+// and percentiles are computed after stop().
+#pragma once
+
+#include "sulcus/engine/renderer.h"
+#include "sulcus/haptics/device.h"
+#include "sulcus/haptics/recording.h"
+#include "sulcus/haptics/safety.h"
+
+#include <array>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <thread>
+#include <type_traits>
+#include <vector>
+
+namespace sulcus {
+
+// Single-writer, many-reader publication of a small trivially copyable value. The writer never
+// waits; a reader retries while a write is in progress, so every value it returns was written
+// whole by one store(). The payload is kept in atomic words so no access is a data race.
+template <class T>
+class Seqlock {
+    static_assert(std::is_trivially_copyable_v<T>, "Seqlock holds trivially copyable values");
+    static constexpr std::size_t kWords = (sizeof(T) + sizeof(uint64_t) - 1) / sizeof(uint64_t);
+
+public:
+    // Writer side (one thread only).
+    void store(const T& value) noexcept {
+        uint64_t buf[kWords] = {};
+        std::memcpy(buf, &value, sizeof(T));
+        const uint64_t s = seq_.load(std::memory_order_relaxed);
+        seq_.store(s + 1, std::memory_order_relaxed);  // odd: write in progress
+        std::atomic_thread_fence(std::memory_order_release);
+        for (std::size_t i = 0; i < kWords; ++i) words_[i].store(buf[i], std::memory_order_relaxed);
+        seq_.store(s + 2, std::memory_order_release);
+    }
+    // Reader side (any thread). False when nothing has been stored yet.
+    bool load(T& out) const noexcept {
+        uint64_t buf[kWords];
+        for (;;) {
+            const uint64_t s1 = seq_.load(std::memory_order_acquire);
+            if (s1 & 1u) continue;
+            for (std::size_t i = 0; i < kWords; ++i) buf[i] = words_[i].load(std::memory_order_relaxed);
+            std::atomic_thread_fence(std::memory_order_acquire);
+            if (seq_.load(std::memory_order_relaxed) != s1) continue;
+            if (s1 == 0) return false;
+            std::memcpy(&out, buf, sizeof(T));
+            return true;
+        }
+    }
+
+private:
+    std::atomic<uint64_t> seq_{0};
+    std::atomic<uint64_t> words_[kWords] = {};
+};
+
+// What the loop publishes after each tick. `tick` is written first and `tick_check` last in the
+// struct, so a torn copy would show them different (the seqlock prevents it; tests check it).
+struct ServoSnapshot {
+    uint64_t tick = 0;
+    double time_s = 0.0;       // since the loop's first tick (wall clock, CLOCK_MONOTONIC)
+    Pose haptic;               // pose read from the device this tick
+    Pose graphic;              // the renderer's graphic pose
+    Vec3 force_N{0.0};         // sent to the device (after the safety layer)
+    Vec3 torque_Nm{0.0};
+    SafetyState safety = SafetyState::Idle;
+    StepStatus status = StepStatus::Free;
+    bool device_ok = false;    // read() gave a sample
+    uint64_t tick_check = 0;   // == tick
+};
+
+struct ServoConfig {
+    double rate_hz = 1000.0;
+    // Stop by itself after this long (s, wall clock from the first tick); <= 0: run until stop().
+    double duration_s = 0.0;
+    // Ask for SCHED_FIFO at this priority; a refusal is recorded (ServoLoop::realtime_message)
+    // and the loop runs at normal priority.
+    bool try_realtime = true;
+    int realtime_priority = 80;
+    // The safety layer's settings; its nominal_dt_s is set to 1 / rate_hz.
+    SafetyConfig safety;
+    // Keep the first `trace_ticks` ticks as sent (the same TickSample handed to the recorder),
+    // preallocated at start; 0 keeps none.
+    std::size_t trace_ticks = 0;
+    // Step-time samples kept (the latest ones, a ring).
+    std::size_t step_time_ring = 1u << 16;
+};
+
+// Period histogram: 0 .. 5 ms in 10 us bins, plus one overflow bin.
+inline constexpr int kPeriodBinUs = 10;
+inline constexpr int kPeriodBins = 500;
+// Jitter |period - nominal| histogram: 0 .. 5 ms in 1 us bins, plus one overflow bin.
+inline constexpr int kJitterBins = 5000;
+
+struct Percentiles {
+    double p50 = 0.0, p99 = 0.0, max = 0.0;
+};
+
+struct ServoStats {
+    uint64_t ticks = 0;
+    double elapsed_s = 0.0;          // first tick's wake to last tick's wake
+    double achieved_rate_hz = 0.0;   // (ticks - 1) / elapsed_s
+    double nominal_rate_hz = 0.0;
+    Percentiles period_us;           // tick-to-tick wake period
+    Percentiles jitter_us;           // |period - nominal period|
+    Percentiles step_us;             // renderer step wall time (over the kept samples)
+    uint64_t deadline_misses = 0;    // ticks whose work ended after the next deadline
+    uint64_t skipped_slots = 0;      // deadlines dropped to catch up after an overrun
+    uint64_t read_failures = 0;      // device.read() returned false
+    uint64_t record_drops = 0;       // recorder.add_tick() refused (ring full)
+    std::array<uint64_t, kStepStatusCount> status_counts{};
+    std::array<uint64_t, 6> safety_counts{};  // ticks per SafetyState (enum order)
+    double max_force_sent_N = 0.0;
+    double max_torque_sent_Nm = 0.0;
+    bool non_finite_sent = false;    // a non-finite force or torque was sent (must never be)
+    std::array<uint64_t, kPeriodBins + 1> period_histogram{};  // [i]: i*10 .. (i+1)*10 us
+    bool realtime = false;           // SCHED_FIFO was granted
+    std::string realtime_message;    // why not, when not
+};
+
+class ServoLoop {
+public:
+    ServoLoop();
+    ~ServoLoop();  // stops the loop if it runs
+    ServoLoop(const ServoLoop&) = delete;
+    ServoLoop& operator=(const ServoLoop&) = delete;
+
+    // Starts the device (device.start()) and the servo thread, and returns once the thread has
+    // set its priority and warmed the step up (first-call scratch), before its first tick.
+    // `model`, `device` and `recorder` (may be null; the caller opens it, runs its writer thread
+    // and closes it after stop()) must outlive the loop. The renderer state starts at the
+    // device's first pose. The device pose is used as the haptic pose in the world frame.
+    // Returns "" or one line saying why the loop did not start.
+    std::string start(const ServoConfig& config, Device& device, const Model& model,
+                      RecordingWriter* recorder = nullptr);
+    // Asks the loop to end, waits for it, sends one zero wrench and stops the device.
+    void stop();
+    // Waits for a loop with a duration to end by itself, then as stop().
+    void wait();
+    bool running() const noexcept { return running_.load(std::memory_order_acquire); }
+
+    // The latest tick's outcome; false before the first tick. Lock-free, any thread.
+    bool latest(ServoSnapshot& out) const noexcept { return published_.load(out); }
+    // Set once start() has returned; "" when SCHED_FIFO was granted (or not asked for).
+    const std::string& realtime_message() const noexcept { return realtime_message_; }
+    bool realtime() const noexcept { return realtime_; }
+    // The safety layer (emergency_stop() / reset() from any thread).
+    SafetyLayer* safety() noexcept { return safety_.get(); }
+
+    // Statistics of the last run; meaningful after stop() or wait().
+    ServoStats stats() const;
+    // The kept ticks (ServoConfig::trace_ticks), in order; valid after stop().
+    const std::vector<TickSample>& trace() const noexcept { return trace_; }
+    std::size_t trace_size() const noexcept { return trace_count_; }
+
+private:
+    void run() noexcept;
+    void finish();
+
+    ServoConfig config_;
+    Device* device_ = nullptr;
+    const Model* model_ = nullptr;
+    RecordingWriter* recorder_ = nullptr;
+    std::unique_ptr<SafetyLayer> safety_;
+    std::thread thread_;
+    std::atomic<bool> stop_request_{false};
+    std::atomic<bool> running_{false};
+    std::atomic<bool> ready_{false};
+    Seqlock<ServoSnapshot> published_;
+    bool realtime_ = false;
+    std::string realtime_message_;
+
+    // Servo-thread data, sized at start().
+    std::vector<TickSample> trace_;
+    std::size_t trace_count_ = 0;
+    std::vector<float> step_us_ring_;
+    uint64_t step_samples_ = 0;
+    std::array<uint64_t, kPeriodBins + 1> period_hist_{};
+    std::vector<uint32_t> jitter_hist_;  // kJitterBins + 1
+    double period_max_us_ = 0.0;
+    double jitter_max_us_ = 0.0;
+    double step_max_us_ = 0.0;
+    int64_t first_wake_ns_ = 0;
+    int64_t last_wake_ns_ = 0;
+    ServoStats counts_;  // the counters part, filled by the servo thread
+};
+
+}  // namespace sulcus

@@ -1,0 +1,284 @@
+#include "sulcus/haptics/servo_loop.h"
+
+#include <pthread.h>
+#include <sched.h>
+#include <time.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+
+namespace sulcus {
+namespace {
+
+int64_t now_ns() noexcept {
+    timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return static_cast<int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+}
+
+void sleep_until_ns(int64_t t_ns) noexcept {
+    timespec ts;
+    ts.tv_sec = static_cast<time_t>(t_ns / 1000000000);
+    ts.tv_nsec = static_cast<long>(t_ns % 1000000000);
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    }
+}
+
+bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+// Percentile of a histogram with `bin_us`-wide bins (the bin's upper edge), capped at `max`.
+template <class H>
+double hist_percentile(const H& hist, std::size_t bins, double bin_us, double q, double max_us) {
+    uint64_t total = 0;
+    for (std::size_t i = 0; i < bins; ++i) total += hist[i];
+    if (total == 0) return 0.0;
+    const uint64_t rank = static_cast<uint64_t>(std::ceil(q * static_cast<double>(total)));
+    uint64_t seen = 0;
+    for (std::size_t i = 0; i < bins; ++i) {
+        seen += hist[i];
+        if (seen >= std::max<uint64_t>(rank, 1)) return std::min((static_cast<double>(i) + 1.0) * bin_us, max_us);
+    }
+    return max_us;
+}
+
+}  // namespace
+
+ServoLoop::ServoLoop() = default;
+
+ServoLoop::~ServoLoop() { stop(); }
+
+std::string ServoLoop::start(const ServoConfig& config, Device& device, const Model& model,
+                             RecordingWriter* recorder) {
+    if (thread_.joinable()) return "servo: the loop is already running";
+    if (!(config.rate_hz > 0.0) || !std::isfinite(config.rate_hz) || config.rate_hz > 100000.0)
+        return "servo: rate_hz must be in (0, 100000]";
+    config_ = config;
+    config_.safety.nominal_dt_s = 1.0 / config_.rate_hz;
+    config_.step_time_ring = std::max<std::size_t>(config_.step_time_ring, 1);
+    device_ = &device;
+    model_ = &model;
+    recorder_ = recorder;
+
+    const std::string err = device.start();
+    if (!err.empty()) return err;
+
+    // Everything the ticks touch is allocated here.
+    safety_ = std::make_unique<SafetyLayer>(config_.safety);
+    trace_.assign(config_.trace_ticks, TickSample{});
+    trace_count_ = 0;
+    step_us_ring_.assign(config_.step_time_ring, 0.0f);
+    step_samples_ = 0;
+    period_hist_.fill(0);
+    jitter_hist_.assign(kJitterBins + 1, 0);
+    period_max_us_ = jitter_max_us_ = step_max_us_ = 0.0;
+    first_wake_ns_ = last_wake_ns_ = 0;
+    counts_ = ServoStats{};
+    realtime_ = false;
+    realtime_message_.clear();
+    stop_request_.store(false);
+    ready_.store(false);
+    running_.store(true, std::memory_order_release);
+
+    // The thread sets its own priority and warms up, then waits for the go from here, so the
+    // priority message is readable once start() returns.
+    thread_ = std::thread([this] { run(); });
+    while (!ready_.load(std::memory_order_acquire)) std::this_thread::yield();
+    return "";
+}
+
+void ServoLoop::run() noexcept {
+    if (config_.try_realtime) {
+        sched_param sp{};
+        const int lo = sched_get_priority_min(SCHED_FIFO), hi = sched_get_priority_max(SCHED_FIFO);
+        sp.sched_priority = std::clamp(config_.realtime_priority, lo, hi);
+        const int rc = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp);
+        if (rc == 0) {
+            realtime_ = true;
+        } else {
+            realtime_message_ = std::string("SCHED_FIFO refused (") + std::strerror(rc) +
+                                "): the servo thread runs at normal priority";
+        }
+    } else {
+        realtime_message_ = "SCHED_FIFO not requested";
+    }
+
+    Device& dev = *device_;
+    const Model& model = *model_;
+    SafetyLayer& safety = *safety_;
+
+    // The renderer state starts at the device's first pose; one throwaway step on a copy
+    // makes the step's first-call allocations (thread-local scratch) here, not in a tick.
+    DeviceSample sample;
+    dev.read(sample);
+    State state = make_state(sample.pose);
+    {
+        State warm = state;
+        (void)step(model, warm, sample.pose);
+    }
+    StepResult result;
+    result.graphic = state.graphic;
+    result.status = StepStatus::Held;
+
+    ready_.store(true, std::memory_order_release);
+
+    const int64_t period_ns = static_cast<int64_t>(std::llround(1e9 / config_.rate_hz));
+    const double nominal_us = static_cast<double>(period_ns) * 1e-3;
+    const int64_t duration_ns =
+        config_.duration_s > 0.0 ? static_cast<int64_t>(std::llround(config_.duration_s * 1e9)) : 0;
+    const int64_t start_ns = now_ns() + period_ns;
+    int64_t deadline = start_ns;
+    int64_t prev_wake = 0;
+    bool prev_overran = false;
+    uint64_t tick = 0;
+
+    while (!stop_request_.load(std::memory_order_relaxed)) {
+        sleep_until_ns(deadline);
+        const int64_t wake = now_ns();
+        if (duration_ns > 0 && wake - start_ns >= duration_ns) break;
+        const bool late_wake = wake - deadline > period_ns;
+
+        // Period statistics.
+        if (tick == 0) {
+            first_wake_ns_ = wake;
+        } else {
+            const double period_us = static_cast<double>(wake - prev_wake) * 1e-3;
+            const auto pbin = static_cast<std::size_t>(std::min(period_us / kPeriodBinUs, double(kPeriodBins)));
+            ++period_hist_[pbin];
+            period_max_us_ = std::max(period_max_us_, period_us);
+            const double jitter_us = std::fabs(period_us - nominal_us);
+            const auto jbin = static_cast<std::size_t>(std::min(jitter_us, double(kJitterBins)));
+            ++jitter_hist_[jbin];
+            jitter_max_us_ = std::max(jitter_max_us_, jitter_us);
+        }
+        const double dt_s = tick == 0 ? 1.0 / config_.rate_hz : static_cast<double>(wake - prev_wake) * 1e-9;
+        prev_wake = wake;
+        last_wake_ns_ = wake;
+
+        // Device -> step.
+        const bool read_ok = dev.read(sample);
+        if (!read_ok) ++counts_.read_failures;
+        if (read_ok) {
+            const int64_t s0 = now_ns();
+            result = step(model, state, sample.pose);
+            const double step_us = static_cast<double>(now_ns() - s0) * 1e-3;
+            step_us_ring_[step_samples_ % step_us_ring_.size()] = static_cast<float>(step_us);
+            ++step_samples_;
+            step_max_us_ = std::max(step_max_us_, step_us);
+        }
+        const bool step_ok =
+            read_ok && result.status != StepStatus::Held && result.status != StepStatus::BadInput;
+        ++counts_.status_counts[static_cast<std::size_t>(result.status)];
+
+        // Step -> safety -> device.
+        SafetyInput in;
+        in.force_N = result.force_N;
+        in.torque_Nm = result.torque_Nm;
+        in.step_ok = step_ok;
+        in.deadline_missed = late_wake || prev_overran;
+        in.device_connected = sample.connected;
+        in.device_fault = sample.fault != kDeviceFaultNone;
+        in.dt_s = dt_s;
+        const SafetyOutput out = safety.tick(in);
+        dev.write(out.force_N, out.torque_Nm);
+        ++counts_.safety_counts[static_cast<std::size_t>(out.state)];
+        if (!finite(out.force_N) || !finite(out.torque_Nm)) counts_.non_finite_sent = true;
+        counts_.max_force_sent_N = std::max(counts_.max_force_sent_N, glm::length(out.force_N));
+        counts_.max_torque_sent_Nm = std::max(counts_.max_torque_sent_Nm, glm::length(out.torque_Nm));
+
+        // Record and publish.
+        const double time_s = static_cast<double>(wake - first_wake_ns_) * 1e-9;
+        TickSample ts;
+        ts.tick = tick;
+        ts.time_s = time_s;
+        ts.device_pose = sample.pose;
+        ts.buttons = sample.buttons;
+        ts.force_N = out.force_N;
+        ts.torque_Nm = out.torque_Nm;
+        ts.status = result.status;
+        if (recorder_ && !recorder_->add_tick(ts)) ++counts_.record_drops;
+        if (trace_count_ < trace_.size()) trace_[trace_count_++] = ts;
+
+        ServoSnapshot snap;
+        snap.tick = tick;
+        snap.time_s = time_s;
+        snap.haptic = sample.pose;
+        snap.graphic = result.graphic;
+        snap.force_N = out.force_N;
+        snap.torque_Nm = out.torque_Nm;
+        snap.safety = out.state;
+        snap.status = result.status;
+        snap.device_ok = read_ok;
+        snap.tick_check = tick;
+        published_.store(snap);
+        ++tick;
+
+        // Deadline bookkeeping: the work must end before the next deadline. After an overrun
+        // the missed slots are dropped rather than run back to back.
+        const int64_t end = now_ns();
+        deadline += period_ns;
+        prev_overran = end > deadline;
+        if (prev_overran) {
+            ++counts_.deadline_misses;
+            const int64_t behind = end - deadline;
+            const int64_t skip = behind / period_ns + 1;
+            if (skip > 1) {
+                deadline += (skip - 1) * period_ns;
+                counts_.skipped_slots += static_cast<uint64_t>(skip - 1);
+            }
+        }
+    }
+    counts_.ticks = tick;
+    running_.store(false, std::memory_order_release);
+}
+
+void ServoLoop::finish() {
+    if (!thread_.joinable()) return;
+    thread_.join();
+    if (device_) {
+        device_->write(Vec3(0.0), Vec3(0.0));
+        device_->stop();
+    }
+}
+
+void ServoLoop::stop() {
+    stop_request_.store(true, std::memory_order_relaxed);
+    finish();
+}
+
+void ServoLoop::wait() {
+    if (config_.duration_s <= 0.0) stop_request_.store(true, std::memory_order_relaxed);
+    finish();
+}
+
+ServoStats ServoLoop::stats() const {
+    ServoStats s = counts_;
+    s.nominal_rate_hz = config_.rate_hz;
+    s.elapsed_s = static_cast<double>(last_wake_ns_ - first_wake_ns_) * 1e-9;
+    s.achieved_rate_hz = s.ticks > 1 && s.elapsed_s > 0.0 ? static_cast<double>(s.ticks - 1) / s.elapsed_s : 0.0;
+    s.period_histogram = period_hist_;
+    s.period_us.p50 = hist_percentile(period_hist_, period_hist_.size(), kPeriodBinUs, 0.5, period_max_us_);
+    s.period_us.p99 = hist_percentile(period_hist_, period_hist_.size(), kPeriodBinUs, 0.99, period_max_us_);
+    s.period_us.max = period_max_us_;
+    s.jitter_us.p50 = hist_percentile(jitter_hist_, jitter_hist_.size(), 1.0, 0.5, jitter_max_us_);
+    s.jitter_us.p99 = hist_percentile(jitter_hist_, jitter_hist_.size(), 1.0, 0.99, jitter_max_us_);
+    s.jitter_us.max = jitter_max_us_;
+    const std::size_t n = static_cast<std::size_t>(std::min<uint64_t>(step_samples_, step_us_ring_.size()));
+    if (n > 0) {
+        std::vector<float> v(step_us_ring_.begin(), step_us_ring_.begin() + static_cast<std::ptrdiff_t>(n));
+        std::sort(v.begin(), v.end());
+        auto at = [&](double q) {
+            const std::size_t i = std::min(n - 1, static_cast<std::size_t>(std::ceil(q * double(n))) - (q > 0 ? 1 : 0));
+            return static_cast<double>(v[i]);
+        };
+        s.step_us.p50 = at(0.5);
+        s.step_us.p99 = at(0.99);
+        s.step_us.max = step_max_us_;
+    }
+    s.realtime = realtime_;
+    s.realtime_message = realtime_message_;
+    return s;
+}
+
+}  // namespace sulcus
