@@ -1,0 +1,141 @@
+#include "sulcus/haptics/replay_device.h"
+
+#include <cmath>
+#include <cstring>
+
+namespace sulcus {
+
+ReplayDevice::ReplayDevice(const RecordingRead& recording) { init(recording); }
+
+ReplayDevice::ReplayDevice(const std::string& path) { init(read_recording(path)); }
+
+void ReplayDevice::init(const RecordingRead& recording) {
+    caps_.name = "replay";
+    caps_.input_dof = 6;   // the recorded pose is a full pose
+    caps_.output_dof = 6;  // force and torque are both stored
+    const double rate = recording.metadata.rate_hz;
+    caps_.nominal_rate_Hz = rate > 0.0 && std::isfinite(rate) ? rate : 1000.0;
+    dt_s_ = 1.0 / caps_.nominal_rate_Hz;
+    if (!recording.ok()) {
+        error_ = "replay: " + recording.error;
+        return;
+    }
+    ticks_ = recording.ticks;
+    forces_.assign(ticks_.size(), Vec3(0.0));
+    torques_.assign(ticks_.size(), Vec3(0.0));
+}
+
+std::string ReplayDevice::start() {
+    if (!error_.empty()) return error_;
+    if (ticks_.empty()) return "replay: the recording holds no ticks";
+    cursor_ = 0;
+    writes_past_end_ = 0;
+    for (std::size_t i = 0; i < ticks_.size(); ++i) forces_[i] = torques_[i] = Vec3(0.0);
+    running_ = true;
+    return "";
+}
+
+bool ReplayDevice::read(DeviceSample& sample) noexcept {
+    if (!running_) {
+        sample.connected = false;
+        sample.fault = kDeviceFaultNotStarted;
+        return false;
+    }
+    // Past the end the stylus rests where it was last seen.
+    const std::size_t i = cursor_ < ticks_.size() ? cursor_ : ticks_.size() - 1;
+    const TickSample& t = ticks_[i];
+    sample.pose = t.device_pose;
+    sample.buttons = t.buttons;
+    // Not recorded: a backward difference of the recorded positions stands in for it.
+    sample.linear_velocity_m_per_s =
+        i > 0 && cursor_ < ticks_.size() ? (t.device_pose.position - ticks_[i - 1].device_pose.position) / dt_s_
+                                         : Vec3(0.0);
+    sample.connected = true;
+    sample.fault = kDeviceFaultNone;
+    return true;
+}
+
+void ReplayDevice::write(const Vec3& force_N, const Vec3& torque_Nm) noexcept {
+    if (!running_) return;
+    if (cursor_ >= ticks_.size()) {
+        ++writes_past_end_;
+        return;
+    }
+    forces_[cursor_] = force_N;
+    torques_[cursor_] = torque_Nm;
+    ++cursor_;
+}
+
+void ReplayDevice::stop() { running_ = false; }
+
+ReplayResult replay_recording(const RecordingRead& recording, const Model& model, const SafetyConfig& safety_config) {
+    ReplayResult r;
+    const double rate_hz = recording.metadata.rate_hz;
+    if (!(rate_hz > 0.0) || !std::isfinite(rate_hz) || rate_hz > 100000.0) {
+        r.error = "replay: rate_hz must be in (0, 100000]";
+        return r;
+    }
+    ReplayDevice dev(recording);
+    if (std::string err = dev.start(); !err.empty()) {
+        r.error = err;
+        return r;
+    }
+    const std::size_t n = dev.tick_count();
+    r.status.assign(n, StepStatus::Held);
+    r.safety.assign(n, SafetyState::Idle);
+
+    SafetyConfig cfg = safety_config;
+    const double dt_s = 1.0 / rate_hz;
+    cfg.nominal_dt_s = dt_s;  // as ServoLoop::start
+    SafetyLayer safety(cfg);
+
+    // --- Kept in step with ServoLoop::run() (haptics/src/servo_loop.cpp): the set-up before
+    // the loop (initial read, make_state, warm-up step, initial result) and the tick's
+    // "Device -> step" and "Step -> safety -> device" blocks. Only the clock differs: dt is
+    // 1 / rate and no deadline is missed. ---
+    DeviceSample sample;
+    dev.read(sample);
+    State state = make_state(sample.pose);
+    {
+        State warm = state;
+        (void)step(model, warm, sample.pose);
+    }
+    StepResult result;
+    result.graphic = state.graphic;
+    result.status = StepStatus::Held;
+
+    for (std::size_t tick = 0; tick < n; ++tick) {
+        const bool read_ok = dev.read(sample);
+        if (read_ok) result = step(model, state, sample.pose);
+        const bool step_ok =
+            read_ok && result.status != StepStatus::Held && result.status != StepStatus::BadInput;
+
+        SafetyInput in;
+        in.force_N = result.force_N;
+        in.torque_Nm = result.torque_Nm;
+        in.step_ok = step_ok;
+        in.deadline_missed = false;
+        in.device_connected = sample.connected;
+        in.device_fault = sample.fault != kDeviceFaultNone;
+        in.dt_s = dt_s;
+        const SafetyOutput out = safety.tick(in);
+        dev.write(out.force_N, out.torque_Nm);
+        // --- end of the part kept in step with ServoLoop::run() ---
+
+        r.status[tick] = result.status;
+        r.safety[tick] = out.state;
+    }
+    dev.stop();
+
+    r.force_N = dev.forces_written();
+    r.torque_Nm = dev.torques_written();
+    for (std::size_t i = 0; i < n && r.first_mismatch < 0; ++i) {
+        const TickSample& t = dev.recorded()[i];
+        if (std::memcmp(&t.force_N, &r.force_N[i], sizeof(Vec3)) != 0 ||
+            std::memcmp(&t.torque_Nm, &r.torque_Nm[i], sizeof(Vec3)) != 0 || t.status != r.status[i])
+            r.first_mismatch = static_cast<int64_t>(i);
+    }
+    return r;
+}
+
+}  // namespace sulcus

@@ -1,0 +1,301 @@
+// Replay of a recorded session: a session is recorded headlessly (a simulated hand presses a
+// 5 mm cube into a slab built in code, through the real step, safety layer and recorder, tick by
+// tick with no clock), read back, and replayed with replay_recording on the same model. The
+// replayed forces equal the recorded ones bit for bit; an edited pose changes them. The
+// ReplayDevice's own contract (cursor, end of recording, no allocation) is checked directly.
+#include "scene_helpers.h"
+
+#include "sulcus/content/primitives.h"
+#include "sulcus/haptics/recording.h"
+#include "sulcus/haptics/replay_device.h"
+#include "sulcus/haptics/safety.h"
+#include "sulcus/haptics/sim_device.h"
+
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <new>
+#include <string>
+#include <vector>
+
+namespace {
+std::atomic<long> g_news{0};
+}
+
+// Counts heap allocations in this executable (read()/write() must make none). The replacement
+// pairs malloc with free; GCC cannot see that once it inlines them, hence the pragma.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+void* operator new(std::size_t n) {
+    ++g_news;
+    if (void* p = std::malloc(n ? n : 1)) return p;
+    throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#pragma GCC diagnostic pop
+
+namespace sulcus {
+namespace {
+
+using test::mm;
+
+constexpr double kRateHz = 1000.0;
+constexpr int kTicks = 2000;
+
+// The hand's target: rest 0.5 mm above the slab for 0.1 s, 6 mm down over 0.4 s (about 1.6 N
+// through the grip, under the 3 N limit), hold, a slow 1 mm slide along x, back up from 1.4 s.
+std::vector<TrajectorySample> press_script() {
+    std::vector<TrajectorySample> out;
+    for (int i = 0; i <= 1000; ++i) {
+        const double t = i * 0.002;
+        const double u = std::clamp((t - 0.1) / 0.4, 0.0, 1.0);
+        const double w = std::clamp((t - 1.4) / 0.3, 0.0, 1.0);
+        const double slide = std::clamp((t - 0.7) / 0.5, 0.0, 1.0);
+        const double down = u * u * (3.0 - 2.0 * u) - w * w * (3.0 - 2.0 * w);
+        out.push_back({t, Pose{Vec3(1.0 * mm * slide, -6.0 * mm * down, 0.0), Quat(1, 0, 0, 0)}});
+    }
+    return out;
+}
+
+std::unique_ptr<Model> slab_model() {
+    const TriMesh tool = make_box(Vec3(2.5 * mm));
+    const TriMesh slab = make_box(Vec3(20 * mm, 2 * mm, 20 * mm), Vec3(0.0, -5.0 * mm, 0.0));
+    return test::model_of(tool, {test::object("slab", slab)});
+}
+
+SafetyConfig safety_config() {
+    SafetyConfig c;
+    c.nominal_dt_s = 1.0 / kRateHz;
+    return c;
+}
+
+std::string temp_path(const char* tag) {
+    return (std::filesystem::temp_directory_path() /
+            (std::string("test_replay_device_") + tag + "_" + std::to_string(::getpid()) + ".rec"))
+        .string();
+}
+
+// Records kTicks ticks of the closed loop without a thread or clock: the servo loop's tick
+// (read, step, safety, write, record) with dt = 1 / rate and no missed deadline.
+RecordingRead record_session(const Model& model, const std::string& path) {
+    HandParameters hp;
+    hp.dt_s = 1.0 / kRateHz;
+    SimulatedHand hand(press_script(), hp);
+    EXPECT_EQ(hand.start(), "");
+    SafetyLayer safety(safety_config());
+
+    RecordingWriter recorder;
+    RecordingMetadata meta;
+    meta.case_path = "in-code slab";
+    meta.device = "sim";
+    meta.rate_hz = kRateHz;
+    RecordingOptions ropts;
+    ropts.sync = SyncPolicy::None;
+    EXPECT_EQ(recorder.open(path, meta, ropts), "");
+
+    DeviceSample sample;
+    hand.read(sample);
+    State state = make_state(sample.pose);
+    StepResult result;
+    result.graphic = state.graphic;
+    result.status = StepStatus::Held;
+    for (int tick = 0; tick < kTicks; ++tick) {
+        if (tick == 1200) hand.set_buttons(1u);  // buttons are replayed too
+        const bool read_ok = hand.read(sample);
+        if (read_ok) result = step(model, state, sample.pose);
+        SafetyInput in;
+        in.force_N = result.force_N;
+        in.torque_Nm = result.torque_Nm;
+        in.step_ok = read_ok && result.status != StepStatus::Held && result.status != StepStatus::BadInput;
+        in.deadline_missed = false;
+        in.device_connected = sample.connected;
+        in.device_fault = sample.fault != kDeviceFaultNone;
+        in.dt_s = 1.0 / kRateHz;
+        const SafetyOutput out = safety.tick(in);
+        hand.write(out.force_N, out.torque_Nm);
+
+        TickSample ts;
+        ts.tick = static_cast<uint64_t>(tick);
+        ts.time_s = tick / kRateHz;
+        ts.device_pose = sample.pose;
+        ts.buttons = sample.buttons;
+        ts.force_N = out.force_N;
+        ts.torque_Nm = out.torque_Nm;
+        ts.status = result.status;
+        EXPECT_TRUE(recorder.add_tick(ts)) << "tick " << tick;
+        if (tick % 100 == 99) {
+            EXPECT_EQ(recorder.flush(), "");
+        }
+    }
+    EXPECT_EQ(recorder.close(), "");
+    hand.stop();
+    return read_recording(path);
+}
+
+bool same_bits(const Vec3& a, const Vec3& b) { return std::memcmp(&a, &b, sizeof(Vec3)) == 0; }
+
+class Replay : public ::testing::Test {
+protected:
+    static void SetUpTestSuite() {
+        model_ = slab_model().release();
+        path_ = new std::string(temp_path("session"));
+        rec_ = new RecordingRead(record_session(*model_, *path_));
+    }
+    static void TearDownTestSuite() {
+        std::filesystem::remove(*path_);
+        delete rec_;
+        delete path_;
+        delete model_;
+    }
+    static Model* model_;
+    static std::string* path_;
+    static RecordingRead* rec_;
+};
+Model* Replay::model_ = nullptr;
+std::string* Replay::path_ = nullptr;
+RecordingRead* Replay::rec_ = nullptr;
+
+TEST_F(Replay, RecordedSessionIsNotTrivial) {
+    ASSERT_TRUE(rec_->ok()) << rec_->error;
+    ASSERT_FALSE(rec_->truncation.truncated) << rec_->truncation.reason;
+    ASSERT_EQ(rec_->ticks.size(), static_cast<std::size_t>(kTicks));
+    int contact = 0;
+    double max_force = 0.0;
+    for (const TickSample& t : rec_->ticks) {
+        if (t.status == StepStatus::Contact) ++contact;
+        max_force = std::max(max_force, glm::length(t.force_N));
+    }
+    EXPECT_GT(contact, 500);
+    EXPECT_GT(max_force, 1.0);
+    EXPECT_LT(max_force, 3.0);  // under the force limit: forces are not just the clamp
+    std::printf("%d ticks in contact, max force %.4f N\n", contact, max_force);
+}
+
+TEST_F(Replay, ReplayedForcesEqualRecordedBitForBit) {
+    ASSERT_TRUE(rec_->ok()) << rec_->error;
+    const ReplayResult r = replay_recording(*rec_, *model_, safety_config());
+    ASSERT_TRUE(r.ok()) << r.error;
+    ASSERT_EQ(r.force_N.size(), rec_->ticks.size());
+    ASSERT_EQ(r.torque_Nm.size(), rec_->ticks.size());
+    for (std::size_t i = 0; i < rec_->ticks.size(); ++i) {
+        ASSERT_TRUE(same_bits(r.force_N[i], rec_->ticks[i].force_N)) << "tick " << i;
+        ASSERT_TRUE(same_bits(r.torque_Nm[i], rec_->ticks[i].torque_Nm)) << "tick " << i;
+        ASSERT_EQ(r.status[i], rec_->ticks[i].status) << "tick " << i;
+    }
+    EXPECT_EQ(r.first_mismatch, -1);
+}
+
+TEST_F(Replay, TwoReplaysAreIdentical) {
+    ASSERT_TRUE(rec_->ok()) << rec_->error;
+    const ReplayResult a = replay_recording(*rec_, *model_, safety_config());
+    const ReplayResult b = replay_recording(*rec_, *model_, safety_config());
+    ASSERT_TRUE(a.ok() && b.ok());
+    ASSERT_EQ(a.force_N.size(), b.force_N.size());
+    EXPECT_EQ(std::memcmp(a.force_N.data(), b.force_N.data(), a.force_N.size() * sizeof(Vec3)), 0);
+    EXPECT_EQ(std::memcmp(a.torque_Nm.data(), b.torque_Nm.data(), a.torque_Nm.size() * sizeof(Vec3)), 0);
+    EXPECT_EQ(a.status, b.status);
+    EXPECT_EQ(a.safety, b.safety);
+}
+
+TEST_F(Replay, EditedPoseChangesTheForceFromThatTick) {
+    ASSERT_TRUE(rec_->ok()) << rec_->error;
+    // A tick in steady contact, force well inside the limits.
+    std::size_t k = 0;
+    for (std::size_t i = 800; i < rec_->ticks.size(); ++i) {
+        const TickSample& t = rec_->ticks[i];
+        const double f = glm::length(t.force_N);
+        if (t.status == StepStatus::Contact && f > 0.5 && f < 2.5) {
+            k = i;
+            break;
+        }
+    }
+    ASSERT_GT(k, 0u) << "no tick in contact to edit";
+
+    RecordingRead edited = *rec_;
+    edited.ticks[k].device_pose.position.y -= 0.3 * mm;  // 0.3 mm deeper into the slab
+    const ReplayResult r = replay_recording(edited, *model_, safety_config());
+    ASSERT_TRUE(r.ok()) << r.error;
+    ASSERT_EQ(r.force_N.size(), rec_->ticks.size());
+    for (std::size_t i = 0; i < k; ++i)
+        ASSERT_TRUE(same_bits(r.force_N[i], rec_->ticks[i].force_N)) << "tick " << i << " before the edit";
+    EXPECT_EQ(r.first_mismatch, static_cast<int64_t>(k));
+    EXPECT_FALSE(same_bits(r.force_N[k], rec_->ticks[k].force_N));
+    std::printf("edited tick %zu: recorded %.6f N, replayed %.6f N\n", k, glm::length(rec_->ticks[k].force_N),
+                glm::length(r.force_N[k]));
+}
+
+TEST_F(Replay, DeviceReplaysPosesAndStoresWrites) {
+    ASSERT_TRUE(rec_->ok()) << rec_->error;
+    ReplayDevice dev(*path_);  // from the file this time
+    ASSERT_EQ(dev.error(), "");
+    EXPECT_EQ(dev.capabilities().name, "replay");
+    EXPECT_EQ(dev.capabilities().nominal_rate_Hz, kRateHz);
+    ASSERT_EQ(dev.tick_count(), rec_->ticks.size());
+
+    DeviceSample s;
+    EXPECT_FALSE(dev.read(s));  // not started
+    EXPECT_EQ(s.fault, kDeviceFaultNotStarted);
+    ASSERT_EQ(dev.start(), "");
+
+    // A read with no write in between sees the same tick (the loop's read before its first tick).
+    ASSERT_TRUE(dev.read(s));
+    ASSERT_TRUE(dev.read(s));
+    EXPECT_EQ(dev.cursor(), 0u);
+
+    const long before = g_news.load();
+    for (std::size_t i = 0; i < rec_->ticks.size(); ++i) {
+        const TickSample& t = rec_->ticks[i];
+        ASSERT_TRUE(dev.read(s));
+        ASSERT_TRUE(s.connected);
+        ASSERT_EQ(s.fault, kDeviceFaultNone);
+        ASSERT_TRUE(same_bits(s.pose.position, t.device_pose.position)) << "tick " << i;
+        ASSERT_EQ(std::memcmp(&s.pose.orientation, &t.device_pose.orientation, sizeof(Quat)), 0) << "tick " << i;
+        ASSERT_EQ(s.buttons, t.buttons) << "tick " << i;
+        ASSERT_FALSE(dev.finished());
+        dev.write(Vec3(double(i), 0.0, 1.0), Vec3(0.0, double(i), 0.0));
+    }
+    EXPECT_TRUE(dev.finished());
+    // After the end: the last pose, still connected; extra writes are counted, not stored.
+    ASSERT_TRUE(dev.read(s));
+    EXPECT_TRUE(s.connected);
+    EXPECT_TRUE(same_bits(s.pose.position, rec_->ticks.back().device_pose.position));
+    dev.write(Vec3(-1.0), Vec3(-1.0));
+    EXPECT_EQ(g_news.load() - before, 0) << "read()/write() allocated";
+    EXPECT_EQ(dev.writes_past_end(), 1u);
+    ASSERT_EQ(dev.writes_stored(), rec_->ticks.size());
+    EXPECT_EQ(dev.forces_written().back(), Vec3(double(rec_->ticks.size() - 1), 0.0, 1.0));
+    EXPECT_EQ(dev.torques_written()[7], Vec3(0.0, 7.0, 0.0));
+    // The buttons pressed mid-session came through.
+    EXPECT_EQ(rec_->ticks.back().buttons, 1u);
+    EXPECT_EQ(rec_->ticks.front().buttons, 0u);
+
+    // The counter does count: a vector allocates once.
+    const long probe = g_news.load();
+    std::vector<double> v(3);
+    EXPECT_EQ(g_news.load() - probe, 1);
+    dev.stop();
+    EXPECT_FALSE(dev.read(s));
+}
+
+TEST(ReplayDeviceErrors, MissingFileAndEmptyRecordingDoNotStart) {
+    ReplayDevice missing(temp_path("missing"));
+    EXPECT_NE(missing.error(), "");
+    EXPECT_NE(missing.start(), "");
+    RecordingRead empty;
+    empty.metadata.rate_hz = 1000.0;
+    ReplayDevice none(empty);
+    EXPECT_NE(none.start(), "");
+    auto model = slab_model();
+    EXPECT_FALSE(replay_recording(empty, *model, safety_config()).ok());
+}
+
+}  // namespace
+}  // namespace sulcus
