@@ -806,12 +806,26 @@ void assign_slacks(const Model& model, Workspace& w) {
 // its own normal), or for a zone that gives way along a direction d, n . d, at least 0 (n the
 // constraint's normal): the zone's surface translates along d, so what did not touch it before
 // does not touch it after.
-double give_coefficient(const Model& model, const Atom& a, const ToolPoseAt& at) {
+// `grad` is the atom's gradient (its first three entries the constraint's normal).
+double give_coefficient(const Model& model, const Atom& a, const double grad[6]) {
     const Vec3& d = model.zone_direction[atom_zone(model, a)];
     if (d.x == 0.0 && d.y == 0.0 && d.z == 0.0) return 1.0;
-    double grad[6];
-    evaluate_atom(model, a, at, grad);
     return std::max(0.0, grad[0] * d.x + grad[1] * d.y + grad[2] * d.z);
+}
+
+// The exact value of an atom whose zone gives way by `depth` (m; a rigid atom: slot < 0): >= 0
+// when it holds. One evaluation of the atom either way.
+double value_with_give(const Model& model, const Atom& a, const ToolPoseAt& at, int slot, double depth,
+                       double* give = nullptr) {
+    if (slot < 0) {
+        if (give) *give = 0.0;
+        return evaluate_atom(model, a, at, nullptr);
+    }
+    double grad[6];
+    const double g = evaluate_atom(model, a, at, grad);
+    const double gv = give_coefficient(model, a, grad) * depth;
+    if (give) *give = gv;
+    return g + gv;
 }
 
 // How far the zone of slot `slot` gives way at the slack values `x` (m).
@@ -864,8 +878,7 @@ void order_rows(const Model& model, Workspace& w, const ToolPoseAt& at, const do
     for (int i = 0; i < n; ++i) {
         w.order_index[i] = i;
         const int slot = w.cand_slot[i];
-        w.order_value[i] = evaluate_atom(model, w.cand[i], at, nullptr) +
-                           (slot < 0 ? 0.0 : give_coefficient(model, w.cand[i], at) * slot_depth(w.slacks, slot, x));
+        w.order_value[i] = value_with_give(model, w.cand[i], at, slot, slot_depth(w.slacks, slot, x));
     }
     Atom warm_atoms[qp::kVars];
     int warm_count = 0;
@@ -934,8 +947,7 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
     // The exact value of atom i with its zone's give: >= 0 when it holds.
     auto value = [&](int i, const ToolPoseAt& at) {
         const int slot = w.cand_slot[i];
-        return evaluate_atom(model, w.cand[i], at, nullptr) +
-               (slot < 0 ? 0.0 : give_coefficient(model, w.cand[i], at) * slot_depth(w.slacks, slot, x));
+        return value_with_give(model, w.cand[i], at, slot, slot_depth(w.slacks, slot, x));
     };
     int guard_rounds = 0;
     for (int it = 0; it < S.max_relinearizations; ++it) {
@@ -958,7 +970,7 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
                 const int slot = w.cand_slot[i];
                 for (int v = qp::kPoseVars; v < vars; ++v) P.a[i][v] = 0.0;
                 if (slot >= 0) {
-                    const double c = give_coefficient(model, w.cand[i], at);
+                    const double c = give_coefficient(model, w.cand[i], grad);
                     for (int v = w.slacks.first[slot]; v < w.slacks.first[slot] + w.slacks.count[slot]; ++v) P.a[i][v] = c;
                 }
             }
@@ -1153,10 +1165,10 @@ int count_regions(const Model& model, const Workspace& w, const Atom* atoms, int
     return regions;
 }
 
-// How far the zone of the chosen candidate's atom i gives way (m).
-double best_give(const Model& model, const Workspace& w, int i, const ToolPoseAt& at) {
+// The exact value of the chosen candidate's atom i with its zone's give (`give` receives the give).
+double best_value(const Model& model, const Workspace& w, int i, const ToolPoseAt& at, double* give = nullptr) {
     const int slot = w.best_slot[i];
-    return slot < 0 ? 0.0 : give_coefficient(model, w.best[i], at) * w.best_slacks.depth[slot];
+    return value_with_give(model, w.best[i], at, slot, slot < 0 ? 0.0 : w.best_slacks.depth[slot], give);
 }
 
 // The contacts of the chosen atom set at x: an atom within 2 tolerances of zero is touching; it
@@ -1177,8 +1189,8 @@ ContactCheck check_contacts(const Model& model, const Pose& base, const double x
     bool touching = false;
     for (int i = 0; i < w.best_count; ++i) {
         const Atom& a = w.best[i];
-        const double give = best_give(model, w, i, at);
-        if (evaluate_atom(model, a, at, nullptr) + give > 2.0 * tol) continue;
+        double give = 0.0;
+        if (best_value(model, w, i, at, &give) > 2.0 * tol) continue;
         touching = true;
         const ModelObject& o = model.objects[a.object];
         double d = 0.0;
@@ -1482,7 +1494,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             // The active contacts: atoms touching at the solution.
             const ToolPoseAt at = tool_pose_at(base, x_sol);
             for (int i = 0; i < w.best_count; ++i) {
-                const double g = evaluate_atom(model, w.best[i], at, nullptr) + best_give(model, w, i, at);
+                const double g = best_value(model, w, i, at);
                 if (g <= S.contact_distance_m) {
                     const Atom& a = w.best[i];
                     if (a.kind == AtomKind::VertexFace) ++res.stats.active_vf;

@@ -1,5 +1,7 @@
 #include "sulcus/haptics/replay_device.h"
 
+#include "sulcus/haptics/servo_loop.h"
+
 #include <cmath>
 #include <cstring>
 
@@ -89,41 +91,13 @@ ReplayResult replay_recording(const RecordingRead& recording, const Model& model
     cfg.nominal_dt_s = dt_s;  // as ServoLoop::start
     SafetyLayer safety(cfg);
 
-    // --- Kept in step with ServoLoop::run() (haptics/src/servo_loop.cpp): the set-up before
-    // the loop (initial read, make_state, warm-up step, initial result) and the tick's
-    // "Device -> step" and "Step -> safety -> device" blocks. Only the clock differs: dt is
-    // 1 / rate and no deadline is missed. ---
-    DeviceSample sample;
-    dev.read(sample);
-    State state = make_state(sample.pose);
-    {
-        State warm = state;
-        (void)step(model, warm, sample.pose);
-    }
-    StepResult result;
-    result.graphic = state.graphic;
-    result.status = StepStatus::Held;
-
+    // The servo loop's own tick, with a replay's clock: dt is 1 / rate and no deadline is missed.
+    ServoTick work;
+    work.begin(dev, model);
     for (std::size_t tick = 0; tick < n; ++tick) {
-        const bool read_ok = dev.read(sample);
-        if (read_ok) result = step(model, state, sample.pose);
-        const bool step_ok =
-            read_ok && result.status != StepStatus::Held && result.status != StepStatus::BadInput;
-
-        SafetyInput in;
-        in.force_N = result.force_N;
-        in.torque_Nm = result.torque_Nm;
-        in.step_ok = step_ok;
-        in.deadline_missed = false;
-        in.device_connected = sample.connected;
-        in.device_fault = sample.fault != kDeviceFaultNone;
-        in.dt_s = dt_s;
-        const SafetyOutput out = safety.tick(in);
-        dev.write(out.force_N, out.torque_Nm);
-        // --- end of the part kept in step with ServoLoop::run() ---
-
-        r.status[tick] = result.status;
-        r.safety[tick] = out.state;
+        const ServoTick::Out out = work.run(dev, model, safety, false, dt_s);
+        r.status[tick] = work.result().status;
+        r.safety[tick] = out.sent.state;
     }
     dev.stop();
 

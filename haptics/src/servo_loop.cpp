@@ -88,6 +88,41 @@ std::string ServoLoop::start(const ServoConfig& config, Device& device, const Mo
     return "";
 }
 
+void ServoTick::begin(Device& device, const Model& model) noexcept {
+    device.read(sample_);
+    state_ = make_state(sample_.pose);
+    {
+        State warm = state_;
+        (void)step(model, warm, sample_.pose);
+    }
+    result_ = StepResult{};
+    result_.graphic = state_.graphic;
+    result_.status = StepStatus::Held;
+}
+
+ServoTick::Out ServoTick::run(Device& device, const Model& model, SafetyLayer& safety, bool deadline_missed,
+                              double dt_s) noexcept {
+    Out o;
+    o.read_ok = device.read(sample_);
+    if (o.read_ok) {
+        const int64_t s0 = now_ns();
+        result_ = step(model, state_, sample_.pose);
+        o.step_us = static_cast<double>(now_ns() - s0) * 1e-3;
+    }
+    o.step_ok = o.read_ok && result_.status != StepStatus::Held && result_.status != StepStatus::BadInput;
+    SafetyInput in;
+    in.force_N = result_.force_N;
+    in.torque_Nm = result_.torque_Nm;
+    in.step_ok = o.step_ok;
+    in.deadline_missed = deadline_missed;
+    in.device_connected = sample_.connected;
+    in.device_fault = sample_.fault != kDeviceFaultNone;
+    in.dt_s = dt_s;
+    o.sent = safety.tick(in);
+    device.write(o.sent.force_N, o.sent.torque_Nm);
+    return o;
+}
+
 void ServoLoop::run() noexcept {
     if (config_.try_realtime) {
         sched_param sp{};
@@ -108,18 +143,8 @@ void ServoLoop::run() noexcept {
     const Model& model = *model_;
     SafetyLayer& safety = *safety_;
 
-    // The renderer state starts at the device's first pose; one throwaway step on a copy
-    // makes the step's first-call allocations (thread-local scratch) here, not in a tick.
-    DeviceSample sample;
-    dev.read(sample);
-    State state = make_state(sample.pose);
-    {
-        State warm = state;
-        (void)step(model, warm, sample.pose);
-    }
-    StepResult result;
-    result.graphic = state.graphic;
-    result.status = StepStatus::Held;
+    ServoTick work;
+    work.begin(dev, model);
 
     ready_.store(true, std::memory_order_release);
 
@@ -156,32 +181,18 @@ void ServoLoop::run() noexcept {
         prev_wake = wake;
         last_wake_ns_ = wake;
 
-        // Device -> step.
-        const bool read_ok = dev.read(sample);
-        if (!read_ok) ++counts_.read_failures;
-        if (read_ok) {
-            const int64_t s0 = now_ns();
-            result = step(model, state, sample.pose);
-            const double step_us = static_cast<double>(now_ns() - s0) * 1e-3;
-            step_us_ring_[step_samples_ % step_us_ring_.size()] = static_cast<float>(step_us);
+        // Device -> step -> safety -> device.
+        const ServoTick::Out o = work.run(dev, model, safety, late_wake || prev_overran, dt_s);
+        const DeviceSample& sample = work.sample();
+        const StepResult& result = work.result();
+        const SafetyOutput& out = o.sent;
+        if (!o.read_ok) ++counts_.read_failures;
+        if (o.step_us >= 0.0) {
+            step_us_ring_[step_samples_ % step_us_ring_.size()] = static_cast<float>(o.step_us);
             ++step_samples_;
-            step_max_us_ = std::max(step_max_us_, step_us);
+            step_max_us_ = std::max(step_max_us_, o.step_us);
         }
-        const bool step_ok =
-            read_ok && result.status != StepStatus::Held && result.status != StepStatus::BadInput;
         ++counts_.status_counts[static_cast<std::size_t>(result.status)];
-
-        // Step -> safety -> device.
-        SafetyInput in;
-        in.force_N = result.force_N;
-        in.torque_Nm = result.torque_Nm;
-        in.step_ok = step_ok;
-        in.deadline_missed = late_wake || prev_overran;
-        in.device_connected = sample.connected;
-        in.device_fault = sample.fault != kDeviceFaultNone;
-        in.dt_s = dt_s;
-        const SafetyOutput out = safety.tick(in);
-        dev.write(out.force_N, out.torque_Nm);
         ++counts_.safety_counts[static_cast<std::size_t>(out.state)];
         if (!finite(out.force_N) || !finite(out.torque_Nm)) counts_.non_finite_sent = true;
         counts_.max_force_sent_N = std::max(counts_.max_force_sent_N, glm::length(out.force_N));
@@ -209,7 +220,7 @@ void ServoLoop::run() noexcept {
         snap.torque_Nm = out.torque_Nm;
         snap.safety = out.state;
         snap.status = result.status;
-        snap.device_ok = read_ok;
+        snap.device_ok = o.read_ok;
         snap.tick_check = tick;
         published_.store(snap);
         ++tick;

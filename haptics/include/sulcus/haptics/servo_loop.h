@@ -26,6 +26,33 @@ namespace sulcus {
 // Single-writer, many-reader publication of a small trivially copyable value. The writer never
 // waits; a reader retries while a write is in progress, so every value it returns was written
 // whole by one store(). The payload is kept in atomic words so no access is a data race.
+// The work of one servo tick, shared by the threaded loop and the headless replay so the two
+// cannot drift apart: device.read -> renderer step -> safety layer -> device.write. The clock
+// (deadlines, tick length) stays with the caller.
+class ServoTick {
+public:
+    struct Out {
+        bool read_ok = false;
+        bool step_ok = false;     // read, and the step gave a safe answer (not held, not bad input)
+        double step_us = -1.0;    // the step's wall time; < 0 when the read failed and no step ran
+        SafetyOutput sent;        // what was written to the device
+    };
+
+    // Reads the device once and starts the renderer state at its pose; one throwaway step on a
+    // copy makes the step's first-call allocations (thread-local scratch) here, on the calling
+    // thread, not in a tick.
+    void begin(Device& device, const Model& model) noexcept;
+    Out run(Device& device, const Model& model, SafetyLayer& safety, bool deadline_missed, double dt_s) noexcept;
+
+    const DeviceSample& sample() const noexcept { return sample_; }
+    const StepResult& result() const noexcept { return result_; }
+
+private:
+    DeviceSample sample_;
+    State state_;
+    StepResult result_;
+};
+
 template <class T>
 class Seqlock {
     static_assert(std::is_trivially_copyable_v<T>, "Seqlock holds trivially copyable values");
