@@ -77,6 +77,13 @@ TickSample awkward_tick(uint64_t i) {
     s.force_N = Vec3(std::numeric_limits<double>::max(), -std::numeric_limits<double>::infinity(), 0.1 * i);
     s.torque_Nm = Vec3(std::bit_cast<double>(uint64_t{0x7ff8dead0000beefull} + i), std::numbers::pi * i, -1e-310);
     s.status = static_cast<StepStatus>(i % kStepStatusCount);
+    s.dt_s = i % 7 == 0 ? std::nextafter(1e-3, 1.0) : 0.9e-3 + 1e-6 * static_cast<double>(i);
+    s.device_fault = static_cast<uint32_t>(i % 5 == 0 ? 0x300 + i : 0);
+    s.device_read = i % 3 != 1;
+    s.connected = i % 4 != 2;
+    s.deadline_missed = i % 6 == 5;
+    s.safety_state = static_cast<uint8_t>(i % 6);
+    s.step_us = i % 9 == 0 ? -1.0f : 0.25f * static_cast<float>(i);
     return s;
 }
 
@@ -89,7 +96,10 @@ bool same_bits(const TickSample& a, const TickSample& b) {
                          b.device_pose.orientation.w, b.device_pose.orientation.x, b.device_pose.orientation.y,
                          b.device_pose.orientation.z, b.force_N.x, b.force_N.y, b.force_N.z, b.torque_Nm.x,
                          b.torque_Nm.y, b.torque_Nm.z};
-    return a.tick == b.tick && a.buttons == b.buttons && a.status == b.status && std::memcmp(da, db, sizeof da) == 0;
+    return a.tick == b.tick && a.buttons == b.buttons && a.status == b.status && std::memcmp(da, db, sizeof da) == 0 &&
+           std::memcmp(&a.dt_s, &b.dt_s, sizeof(double)) == 0 && a.device_fault == b.device_fault &&
+           a.device_read == b.device_read && a.connected == b.connected && a.deadline_missed == b.deadline_missed &&
+           a.safety_state == b.safety_state && std::memcmp(&a.step_us, &b.step_us, sizeof(float)) == 0;
 }
 
 RecordingMetadata test_metadata() {
@@ -150,7 +160,7 @@ TEST(Recording, RoundTripIsBitExact) {
     const RecordingRead r = read_recording(path);
     ASSERT_TRUE(r.ok()) << r.error;
     EXPECT_FALSE(r.truncation.truncated) << r.truncation.reason;
-    EXPECT_EQ(r.version, 1);
+    EXPECT_EQ(r.version, 2);
     EXPECT_EQ(r.metadata.case_path, test_metadata().case_path);
     EXPECT_EQ(r.metadata.device, "replay");
     EXPECT_EQ(r.metadata.rate_hz, 1000.0);
@@ -165,7 +175,7 @@ TEST(Recording, RoundTripIsBitExact) {
     EXPECT_EQ(r.events[1].json, "");
     EXPECT_EQ(r.events[2].json, "{\"text\":\"ü\\n\"}");
 
-    // Size: header + per tick chunk 28 bytes of framing + 128 per tick.
+    // Size: header + per tick chunk 28 bytes of framing + 160 per tick.
     const auto size = fs::file_size(path);
     const RecordingStats st = w.stats();
     EXPECT_EQ(st.bytes_written, size);
@@ -173,6 +183,68 @@ TEST(Recording, RoundTripIsBitExact) {
     EXPECT_EQ(st.events_written, 3u);
     std::printf("[ measure ] 250 ticks + 3 events: %llu bytes, %.2f bytes/tick in full chunks\n",
                 static_cast<unsigned long long>(size), (28.0 + 100.0 * kTickRecordBytes) / 100.0);
+}
+
+// A version-1 file (128-byte tick records, no clock or device flags), built byte by byte as the
+// format document describes it, still reads: its ticks come back with the v1 defaults.
+TEST(Recording, ReadsVersion1Files) {
+    auto u16 = [](std::vector<uint8_t>& b, uint16_t v) {
+        for (int i = 0; i < 2; ++i) b.push_back(static_cast<uint8_t>(v >> (8 * i)));
+    };
+    auto u32 = [](std::vector<uint8_t>& b, uint32_t v) {
+        for (int i = 0; i < 4; ++i) b.push_back(static_cast<uint8_t>(v >> (8 * i)));
+    };
+    auto u64 = [](std::vector<uint8_t>& b, uint64_t v) {
+        for (int i = 0; i < 8; ++i) b.push_back(static_cast<uint8_t>(v >> (8 * i)));
+    };
+    auto f64 = [&](std::vector<uint8_t>& b, double v) { u64(b, std::bit_cast<uint64_t>(v)); };
+
+    std::vector<uint8_t> file = {'S', 'U', 'L', 'C', 'S', 'R', 'E', 'C'};
+    const std::string meta = R"({"format":"sulcus.recording/1","device":"old","rate_hz":500})";
+    u16(file, 1);
+    u16(file, 0);
+    u32(file, static_cast<uint32_t>(meta.size()));
+    file.insert(file.end(), meta.begin(), meta.end());
+    u32(file, crc32(file.data(), file.size()));
+
+    std::vector<uint8_t> chunk = {'C', 'H', 'N', 'K', 1, 0, 0, 0};
+    u32(chunk, 2 * 128);
+    u32(chunk, 2);
+    u64(chunk, 7);
+    for (uint64_t t = 7; t < 9; ++t) {
+        u64(chunk, t);
+        f64(chunk, 0.002 * static_cast<double>(t));
+        for (double v : {0.01, 0.02, 0.03, 1.0, 0.0, 0.0, 0.0, 0.5, -0.25, 0.0, 0.0, 0.0, 0.001}) f64(chunk, v);
+        u32(chunk, 3);
+        chunk.push_back(1);  // contact
+        chunk.insert(chunk.end(), 3, 0);
+    }
+    u32(chunk, crc32(chunk.data(), chunk.size()));
+    file.insert(file.end(), chunk.begin(), chunk.end());
+
+    const std::string path = temp_path("v1.rec");
+    {
+        std::ofstream out(path, std::ios::binary);
+        out.write(reinterpret_cast<const char*>(file.data()), static_cast<std::streamsize>(file.size()));
+    }
+    const RecordingRead r = read_recording(path);
+    ASSERT_TRUE(r.ok()) << r.error;
+    EXPECT_EQ(r.version, 1);
+    EXPECT_FALSE(r.truncation.truncated) << r.truncation.reason;
+    EXPECT_EQ(r.metadata.device, "old");
+    EXPECT_EQ(r.metadata.rate_hz, 500.0);
+    ASSERT_EQ(r.ticks.size(), 2u);
+    EXPECT_EQ(r.ticks[1].tick, 8u);
+    EXPECT_EQ(r.ticks[1].device_pose.position, Vec3(0.01, 0.02, 0.03));
+    EXPECT_EQ(r.ticks[1].force_N, Vec3(0.5, -0.25, 0.0));
+    EXPECT_EQ(r.ticks[1].torque_Nm, Vec3(0.0, 0.0, 0.001));
+    EXPECT_EQ(r.ticks[1].buttons, 3u);
+    EXPECT_EQ(r.ticks[1].status, StepStatus::Contact);
+    EXPECT_EQ(r.ticks[1].dt_s, 0.0);  // not recorded: a replay uses 1 / rate
+    EXPECT_TRUE(r.ticks[1].device_read);
+    EXPECT_TRUE(r.ticks[1].connected);
+    EXPECT_FALSE(r.ticks[1].deadline_missed);
+    fs::remove(path);
 }
 
 TEST(Recording, CutAnywhereInTheLastChunkKeepsTheEarlierChunks) {
@@ -306,7 +378,7 @@ TEST(Recording, ForeignOrCorruptFilesGiveAOneLineErrorWithTheOffset) {
 
     // A future version is refused even with a consistent header CRC.
     b = bytes;
-    b[8] = 2;
+    b[8] = static_cast<uint8_t>(kRecordingVersion + 1);
     const uint32_t meta = b[12] | (b[13] << 8) | (b[14] << 16) | (static_cast<uint32_t>(b[15]) << 24);
     const uint32_t crc = crc32(b.data(), 16 + meta);
     for (int i = 0; i < 4; ++i) b[16 + meta + i] = static_cast<uint8_t>(crc >> (8 * i));

@@ -1,4 +1,4 @@
-// Session recording writer and reader, format "sulcus.recording/1" (docs/recording-format.md).
+// Session recording writer and reader, format "sulcus.recording/2" (docs/recording-format.md).
 #include "sulcus/haptics/recording.h"
 
 #include "sulcus/engine/json_text.h"
@@ -95,10 +95,18 @@ void encode_tick(uint8_t* p, const TickSample& s) {
     put_f64(p + 112, s.torque_Nm.z);
     put_u32(p + 120, s.buttons);
     p[124] = static_cast<uint8_t>(s.status);
-    p[125] = p[126] = p[127] = 0;
+    p[125] = static_cast<uint8_t>((s.device_read ? 1u : 0u) | (s.connected ? 2u : 0u) | (s.deadline_missed ? 4u : 0u));
+    p[126] = s.safety_state;
+    p[127] = 0;
+    put_f64(p + 128, s.dt_s);
+    put_u32(p + 136, s.device_fault);
+    put_u32(p + 140, std::bit_cast<uint32_t>(s.step_us));
+    std::memset(p + 144, 0, kTickRecordBytes - 144);
 }
 
-TickSample decode_tick(const uint8_t* p) {
+// `v1`: a version-1 record (128 bytes) has no clock or device flags; it reads as a tick of the
+// nominal length on a connected, answering device.
+TickSample decode_tick(const uint8_t* p, bool v1) {
     TickSample s;
     s.tick = get_u64(p + 0);
     s.time_s = get_f64(p + 8);
@@ -108,6 +116,14 @@ TickSample decode_tick(const uint8_t* p) {
     s.torque_Nm = Vec3(get_f64(p + 96), get_f64(p + 104), get_f64(p + 112));
     s.buttons = get_u32(p + 120);
     s.status = static_cast<StepStatus>(p[124]);
+    if (v1) return s;
+    s.device_read = (p[125] & 1u) != 0;
+    s.connected = (p[125] & 2u) != 0;
+    s.deadline_missed = (p[125] & 4u) != 0;
+    s.safety_state = p[126];
+    s.dt_s = get_f64(p + 128);
+    s.device_fault = get_u32(p + 136);
+    s.step_us = std::bit_cast<float>(get_u32(p + 140));
     return s;
 }
 
@@ -488,10 +504,12 @@ std::string at(const std::string& path, uint64_t offset) { return path + ": byte
 std::string decode_chunk(uint8_t type, const uint8_t* payload, uint32_t bytes, uint32_t records, uint64_t first_tick,
                          RecordingRead& out) {
     if (type == kChunkTicks) {
-        if (static_cast<uint64_t>(records) * kTickRecordBytes != bytes)
+        const bool v1 = out.version == 1;
+        const std::size_t record_bytes = v1 ? kTickRecordBytesV1 : kTickRecordBytes;
+        if (static_cast<uint64_t>(records) * record_bytes != bytes)
             return "tick chunk of " + std::to_string(records) + " records has " + std::to_string(bytes) +
                    " payload bytes";
-        for (uint32_t i = 0; i < records; ++i) out.ticks.push_back(decode_tick(payload + i * kTickRecordBytes));
+        for (uint32_t i = 0; i < records; ++i) out.ticks.push_back(decode_tick(payload + i * record_bytes, v1));
         if (records > 0 && out.ticks[out.ticks.size() - records].tick != first_tick)
             return "tick chunk's first tick index does not match its first record";
         return "";
@@ -564,8 +582,9 @@ RecordingRead read_recording(const std::string& path) {
         out.error = at(path, kFileHeaderFixed) + "metadata is not a JSON object";
         return out;
     }
-    if (!meta.contains("format") || meta["format"] != kRecordingFormat) {
-        out.error = at(path, kFileHeaderFixed) + "metadata format is not " + kRecordingFormat;
+    const std::string format = out.version == 1 ? "sulcus.recording/1" : kRecordingFormat;
+    if (!meta.contains("format") || meta["format"] != format) {
+        out.error = at(path, kFileHeaderFixed) + "metadata format is not " + format;
         return out;
     }
     auto text_of = [&](const char* key) {

@@ -52,9 +52,9 @@ bool ReplayDevice::read(DeviceSample& sample) noexcept {
     sample.linear_velocity_m_per_s =
         i > 0 && cursor_ < ticks_.size() ? (t.device_pose.position - ticks_[i - 1].device_pose.position) / dt_s_
                                          : Vec3(0.0);
-    sample.connected = true;
-    sample.fault = kDeviceFaultNone;
-    return true;
+    sample.connected = t.connected;
+    sample.fault = t.device_fault;
+    return t.device_read;
 }
 
 void ReplayDevice::write(const Vec3& force_N, const Vec3& torque_Nm) noexcept {
@@ -89,13 +89,53 @@ ReplayResult replay_recording(const RecordingRead& recording, const Model& model
     SafetyConfig cfg = safety_config;
     const double dt_s = 1.0 / rate_hz;
     cfg.nominal_dt_s = dt_s;  // as ServoLoop::start
+
+    // The servo commands as recorded: the starting map and safety settings, then each command
+    // before its tick's work.
+    std::vector<const RecordingEvent*> commands;
+    WorkspaceMap start_map;
+    bool begun = false;
+    for (const RecordingEvent& e : recording.events) {
+        if (!is_servo_event(e.kind)) continue;
+        if (e.kind == kEventServoBegin && !begun) {
+            bool has_safety = false;
+            SafetyConfig recorded;
+            if (std::string err = parse_servo_begin(e.json, start_map, recorded, has_safety); !err.empty()) {
+                r.error = "replay: event servo.begin: " + err;
+                return r;
+            }
+            if (has_safety) cfg = recorded;
+            begun = true;
+            continue;
+        }
+        commands.push_back(&e);
+    }
     SafetyLayer safety(cfg);
 
-    // The servo loop's own tick, with a replay's clock: dt is 1 / rate and no deadline is missed.
+    // The servo loop's own tick with the recorded clock and device state (a version-1 recording
+    // has no clock: every tick lasts 1 / rate and no deadline is missed).
     ServoTick work;
-    work.begin(dev, model);
+    work.begin(dev, model, start_map);
+    std::size_t next = 0;
+    const std::vector<TickSample>& rec = dev.recorded();
     for (std::size_t tick = 0; tick < n; ++tick) {
-        const ServoTick::Out out = work.run(dev, model, safety, false, dt_s);
+        for (; next < commands.size() && commands[next]->tick <= rec[tick].tick; ++next) {
+            const RecordingEvent& e = *commands[next];
+            if (e.kind == kEventServoEStop) {
+                safety.emergency_stop();
+            } else if (e.kind == kEventServoReset) {
+                safety.reset();
+            } else if (e.kind == kEventServoWorkspace) {
+                WorkspaceMap m;
+                if (std::string err = parse_workspace(e.json, m); !err.empty()) {
+                    r.error = "replay: event servo.workspace at tick " + std::to_string(e.tick) + ": " + err;
+                    return r;
+                }
+                work.set_workspace(m);
+            }
+        }
+        const double tick_dt_s = rec[tick].dt_s > 0.0 ? rec[tick].dt_s : dt_s;
+        const ServoTick::Out out = work.run(dev, model, safety, rec[tick].deadline_missed, tick_dt_s);
         r.status[tick] = work.result().status;
         r.safety[tick] = out.sent.state;
     }

@@ -54,6 +54,9 @@ std::string ServoLoop::start(const ServoConfig& config, Device& device, const Mo
     if (thread_.joinable()) return "servo: the loop is already running";
     if (!(config.rate_hz > 0.0) || !std::isfinite(config.rate_hz) || config.rate_hz > 100000.0)
         return "servo: rate_hz must be in (0, 100000]";
+    if (!valid_workspace(config.workspace)) return "servo: workspace offset must be finite and scale in [0.001, 1000]";
+    if (config.command_queue < 1 || config.command_queue > (1u << 16) || config.commands_per_tick < 1)
+        return "servo: command_queue must be 1..65536 and commands_per_tick at least 1";
     config_ = config;
     config_.safety.nominal_dt_s = 1.0 / config_.rate_hz;
     config_.step_time_ring = std::max<std::size_t>(config_.step_time_ring, 1);
@@ -63,9 +66,21 @@ std::string ServoLoop::start(const ServoConfig& config, Device& device, const Mo
 
     const std::string err = device.start();
     if (!err.empty()) return err;
+    // The device's own limits bound the safety layer's: never more force than its peak, and no
+    // torque where it has no actuated gimbal.
+    const DeviceCapabilities& caps = device.capabilities();
+    if (caps.max_force_N > 0.0)
+        config_.safety.limits.max_force_N = std::min(config_.safety.limits.max_force_N, caps.max_force_N);
+    if (caps.output_dof > 0 && caps.output_dof < 6) config_.safety.limits.max_torque_Nm = 0.0;
+    else if (caps.max_torque_Nm > 0.0)
+        config_.safety.limits.max_torque_Nm = std::min(config_.safety.limits.max_torque_Nm, caps.max_torque_Nm);
+    begin_text_ = format_servo_begin(config_.workspace, config_.safety);
 
     // Everything the ticks touch is allocated here.
     safety_ = std::make_unique<SafetyLayer>(config_.safety);
+    commands_ = std::make_unique<SpscQueue<ServoCommand>>(config_.command_queue);
+    estop_request_.store(false);
+    reset_request_.store(false);
     trace_.assign(config_.trace_ticks, TickSample{});
     trace_count_ = 0;
     step_us_ring_.assign(config_.step_time_ring, 0.0f);
@@ -88,12 +103,14 @@ std::string ServoLoop::start(const ServoConfig& config, Device& device, const Mo
     return "";
 }
 
-void ServoTick::begin(Device& device, const Model& model) noexcept {
+void ServoTick::begin(Device& device, const Model& model, const WorkspaceMap& map, const Vec3* anchor) noexcept {
     device.read(sample_);
-    state_ = make_state(sample_.pose);
+    map_ = anchor ? anchored_workspace(map.scale, sample_.pose.position, *anchor) : map;
+    haptic_ = map_device_pose(map_, sample_.pose);
+    state_ = make_state(haptic_);
     {
         State warm = state_;
-        (void)step(model, warm, sample_.pose);
+        (void)step(model, warm, haptic_);
     }
     result_ = StepResult{};
     result_.graphic = state_.graphic;
@@ -105,8 +122,9 @@ ServoTick::Out ServoTick::run(Device& device, const Model& model, SafetyLayer& s
     Out o;
     o.read_ok = device.read(sample_);
     if (o.read_ok) {
+        haptic_ = map_device_pose(map_, sample_.pose);
         const int64_t s0 = now_ns();
-        result_ = step(model, state_, sample_.pose);
+        result_ = step(model, state_, haptic_);
         o.step_us = static_cast<double>(now_ns() - s0) * 1e-3;
     }
     o.step_ok = o.read_ok && result_.status != StepStatus::Held && result_.status != StepStatus::BadInput;
@@ -144,7 +162,10 @@ void ServoLoop::run() noexcept {
     SafetyLayer& safety = *safety_;
 
     ServoTick work;
-    work.begin(dev, model);
+    work.begin(dev, model, config_.workspace, config_.anchor ? &config_.anchor_position_m : nullptr);
+    if (config_.anchor) begin_text_ = format_servo_begin(work.workspace(), config_.safety);  // the anchored map
+    record_event(0, kEventServoBegin, begin_text_);
+    char map_text[160];
 
     ready_.store(true, std::memory_order_release);
 
@@ -181,8 +202,31 @@ void ServoLoop::run() noexcept {
         prev_wake = wake;
         last_wake_ns_ = wake;
 
+        // Requests from other threads, applied (and recorded) before this tick's work.
+        if (estop_request_.exchange(false, std::memory_order_acq_rel)) {
+            safety.emergency_stop();
+            record_event(tick, kEventServoEStop, "{}");
+        }
+        if (reset_request_.exchange(false, std::memory_order_acq_rel)) {
+            safety.reset();
+            record_event(tick, kEventServoReset, "{}");
+        }
+        for (int c = 0; c < config_.commands_per_tick; ++c) {
+            ServoCommand& cmd = command_scratch_;
+            if (!commands_->pop(cmd)) break;
+            ++counts_.commands;
+            if (cmd.type == ServoCommandKind::SetWorkspace) {
+                work.set_workspace(cmd.workspace);
+                record_event(tick, kEventServoWorkspace,
+                             std::string_view(map_text, format_workspace(cmd.workspace, map_text, sizeof map_text)));
+            } else {
+                record_event(tick, cmd.kind_view(), cmd.text_view());
+            }
+        }
+
         // Device -> step -> safety -> device.
-        const ServoTick::Out o = work.run(dev, model, safety, late_wake || prev_overran, dt_s);
+        const bool missed = late_wake || prev_overran;
+        const ServoTick::Out o = work.run(dev, model, safety, missed, dt_s);
         const DeviceSample& sample = work.sample();
         const StepResult& result = work.result();
         const SafetyOutput& out = o.sent;
@@ -208,13 +252,20 @@ void ServoLoop::run() noexcept {
         ts.force_N = out.force_N;
         ts.torque_Nm = out.torque_Nm;
         ts.status = result.status;
+        ts.dt_s = dt_s;
+        ts.device_fault = sample.fault;
+        ts.device_read = o.read_ok;
+        ts.connected = sample.connected;
+        ts.deadline_missed = missed;
+        ts.safety_state = static_cast<uint8_t>(out.state);
+        ts.step_us = static_cast<float>(o.step_us);
         if (recorder_ && !recorder_->add_tick(ts)) ++counts_.record_drops;
         if (trace_count_ < trace_.size()) trace_[trace_count_++] = ts;
 
         ServoSnapshot snap;
         snap.tick = tick;
         snap.time_s = time_s;
-        snap.haptic = sample.pose;
+        snap.haptic = work.haptic();
         snap.graphic = result.graphic;
         snap.force_N = out.force_N;
         snap.torque_Nm = out.torque_Nm;
@@ -242,6 +293,29 @@ void ServoLoop::run() noexcept {
     }
     counts_.ticks = tick;
     running_.store(false, std::memory_order_release);
+}
+
+void ServoLoop::record_event(uint64_t tick, std::string_view kind, std::string_view json) noexcept {
+    if (recorder_ && !recorder_->add_event(tick, kind, json)) ++counts_.event_drops;
+}
+
+std::string ServoLoop::push(const ServoCommand& command) {
+    if (!commands_ || !running()) return "servo: the loop is not running";
+    if (!commands_->push(command))
+        return "servo: command queue full (" + std::to_string(commands_->capacity()) + " waiting)";
+    return "";
+}
+
+std::string ServoLoop::post_event(std::string_view kind, std::string_view json) {
+    ServoCommand c;
+    if (std::string err = make_event_command(kind, json, c); !err.empty()) return err;
+    return push(c);
+}
+
+std::string ServoLoop::set_workspace(const WorkspaceMap& map) {
+    ServoCommand c;
+    if (std::string err = make_workspace_command(map, c); !err.empty()) return err;
+    return push(c);
 }
 
 void ServoLoop::finish() {

@@ -23,22 +23,33 @@
 
 namespace sulcus {
 
-inline constexpr const char* kRecordingFormat = "sulcus.recording/1";
-inline constexpr uint16_t kRecordingVersion = 1;
-// Bytes of one tick record in a tick chunk's payload.
-inline constexpr std::size_t kTickRecordBytes = 128;
+inline constexpr const char* kRecordingFormat = "sulcus.recording/2";
+inline constexpr uint16_t kRecordingVersion = 2;
+// Bytes of one tick record in a tick chunk's payload (version 1: 128, still read).
+inline constexpr std::size_t kTickRecordBytes = 160;
+inline constexpr std::size_t kTickRecordBytesV1 = 128;
 // Largest number of ticks a chunk holds: 100 ms at 1 kHz.
 inline constexpr uint32_t kMaxTicksPerChunk = 100;
 
-// One servo tick as recorded: what the device reported and what was sent back.
+// One servo tick as recorded: what the device reported, what the tick's clock said, and what was
+// sent back. Everything the tick's outcome depends on besides the model and the servo commands
+// (recorded as events) is here, so a replay recomputes the same forces bit for bit.
 struct TickSample {
     uint64_t tick = 0;               // servo tick index since the start of the session
     double time_s = 0.0;             // session time of the tick
-    Pose device_pose;                // haptic tool pose read from the device
+    Pose device_pose;                // pose read from the device, device frame
     uint32_t buttons = 0;            // device buttons, bit i = button i pressed
     Vec3 force_N{0.0};               // force sent to the device (after the safety layer)
     Vec3 torque_Nm{0.0};             // torque sent to the device
     StepStatus status = StepStatus::Free;
+    // The tick's inputs to the safety layer.
+    double dt_s = 0.0;               // tick length the safety layer was given; 0: not recorded (v1)
+    uint32_t device_fault = 0;       // DeviceSample::fault
+    bool device_read = true;         // Device::read() gave a sample
+    bool connected = true;           // DeviceSample::connected
+    bool deadline_missed = false;    // the tick was told its previous work overran
+    uint8_t safety_state = 0;        // SafetyState after the tick (for review; not an input)
+    float step_us = -1.0f;           // the step's wall time, us; < 0 when no step ran
 };
 
 // A UI or lesson event at a tick: a short kind ("site_charted", "lesson_step") and JSON text.

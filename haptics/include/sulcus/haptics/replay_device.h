@@ -1,4 +1,4 @@
-// Replay of a recorded session (sulcus.recording/1): a Device that plays back the recorded
+// Replay of a recorded session (sulcus.recording/2): a Device that plays back the recorded
 // device poses and buttons, and a headless, deterministic replay of the servo tick over a whole
 // recording, so a session's forces can be recomputed and compared bit for bit with what was sent.
 #pragma once
@@ -74,11 +74,14 @@ struct ReplayResult {
     bool ok() const { return error.empty(); }
 };
 
-// Runs the servo loop's tick (device read -> step -> safety layer -> device write) once per
-// recorded tick, in order, on the calling thread with no clock: the renderer state starts at
-// the first tick's pose, every tick lasts 1 / metadata.rate_hz, no deadline is missed, the
-// device is connected and fault-free. `safety.nominal_dt_s` is replaced by 1 / rate, as the loop
-// does. Deterministic: the same recording and model give the same result, bit for bit.
+// Runs the servo loop's tick (device read -> workspace map -> step -> safety layer -> device
+// write) once per recorded tick, in order, on the calling thread with no clock: the renderer
+// state starts at the first tick's pose under the recorded starting map (servo.begin), each tick
+// gets its recorded length, deadline flag and device state, and the recorded servo commands
+// (workspace changes, emergency stop, safety reset) are applied before the tick they were taken
+// at. The safety settings are the recorded ones (servo.begin); `safety` stands in for a recording
+// without them, with its nominal_dt_s replaced by 1 / rate, as the loop does. Deterministic: the same
+// recording and model give the same result, bit for bit.
 ReplayResult replay_recording(const RecordingRead& recording, const Model& model, const SafetyConfig& safety);
 
 }  // namespace sulcus

@@ -9,6 +9,8 @@
 #include "sulcus/haptics/device.h"
 #include "sulcus/haptics/recording.h"
 #include "sulcus/haptics/safety.h"
+#include "sulcus/haptics/servo_command.h"
+#include "sulcus/haptics/spsc_queue.h"
 
 #include <array>
 #include <atomic>
@@ -27,8 +29,8 @@ namespace sulcus {
 // waits; a reader retries while a write is in progress, so every value it returns was written
 // whole by one store(). The payload is kept in atomic words so no access is a data race.
 // The work of one servo tick, shared by the threaded loop and the headless replay so the two
-// cannot drift apart: device.read -> renderer step -> safety layer -> device.write. The clock
-// (deadlines, tick length) stays with the caller.
+// cannot drift apart: device.read -> workspace map -> renderer step -> safety layer ->
+// device.write. The clock (deadlines, tick length) stays with the caller.
 class ServoTick {
 public:
     struct Out {
@@ -38,17 +40,26 @@ public:
         SafetyOutput sent;        // what was written to the device
     };
 
-    // Reads the device once and starts the renderer state at its pose; one throwaway step on a
-    // copy makes the step's first-call allocations (thread-local scratch) here, on the calling
-    // thread, not in a tick.
-    void begin(Device& device, const Model& model) noexcept;
+    // Reads the device once and starts the renderer state at its mapped pose; one throwaway step
+    // on a copy makes the step's first-call allocations (thread-local scratch) here, on the
+    // calling thread, not in a tick. With `anchor`, the map's offset is first set so that this
+    // reading lands on `anchor`'s position (map.scale kept); workspace() then gives the map used.
+    void begin(Device& device, const Model& model, const WorkspaceMap& map = {},
+               const Vec3* anchor = nullptr) noexcept;
     Out run(Device& device, const Model& model, SafetyLayer& safety, bool deadline_missed, double dt_s) noexcept;
 
+    // Takes effect at the next run(). The caller checks valid_workspace().
+    void set_workspace(const WorkspaceMap& map) noexcept { map_ = map; }
+    const WorkspaceMap& workspace() const noexcept { return map_; }
+
     const DeviceSample& sample() const noexcept { return sample_; }
+    const Pose& haptic() const noexcept { return haptic_; }  // the sample's pose in the world frame
     const StepResult& result() const noexcept { return result_; }
 
 private:
     DeviceSample sample_;
+    WorkspaceMap map_;
+    Pose haptic_;
     State state_;
     StepResult result_;
 };
@@ -94,7 +105,7 @@ private:
 struct ServoSnapshot {
     uint64_t tick = 0;
     double time_s = 0.0;       // since the loop's first tick (wall clock, CLOCK_MONOTONIC)
-    Pose haptic;               // pose read from the device this tick
+    Pose haptic;               // pose read from the device this tick, mapped to the world frame
     Pose graphic;              // the renderer's graphic pose
     Vec3 force_N{0.0};         // sent to the device (after the safety layer)
     Vec3 torque_Nm{0.0};
@@ -112,13 +123,23 @@ struct ServoConfig {
     // and the loop runs at normal priority.
     bool try_realtime = true;
     int realtime_priority = 80;
-    // The safety layer's settings; its nominal_dt_s is set to 1 / rate_hz.
+    // The safety layer's settings; its nominal_dt_s is set to 1 / rate_hz, and its force and torque
+    // limits are cut to the device's (ServoLoop::safety_config() gives what was used).
     SafetyConfig safety;
     // Keep the first `trace_ticks` ticks as sent (the same TickSample handed to the recorder),
     // preallocated at start; 0 keeps none.
     std::size_t trace_ticks = 0;
     // Step-time samples kept (the latest ones, a ring).
     std::size_t step_time_ring = 1u << 16;
+    // Device -> world map at the start. With `anchor`, its offset is replaced so that the device's
+    // first reading lands on `anchor_position_m` (e.g. the scene's starting tool position).
+    WorkspaceMap workspace;
+    bool anchor = false;
+    Vec3 anchor_position_m{0.0};
+    // Commands (ServoLoop::post_event, set_workspace) that may wait between two ticks.
+    std::size_t command_queue = 256;
+    // At most this many queued commands are taken per tick; the rest wait for the next.
+    int commands_per_tick = 8;
 };
 
 // Period histogram: 0 .. 5 ms in 10 us bins, plus one overflow bin.
@@ -143,6 +164,8 @@ struct ServoStats {
     uint64_t skipped_slots = 0;      // deadlines dropped to catch up after an overrun
     uint64_t read_failures = 0;      // device.read() returned false
     uint64_t record_drops = 0;       // recorder.add_tick() refused (ring full)
+    uint64_t event_drops = 0;        // recorder.add_event() refused (ring full or too long)
+    uint64_t commands = 0;           // queued commands applied
     std::array<uint64_t, kStepStatusCount> status_counts{};
     std::array<uint64_t, 6> safety_counts{};  // ticks per SafetyState (enum order)
     double max_force_sent_N = 0.0;
@@ -179,8 +202,19 @@ public:
     // Set once start() has returned; "" when SCHED_FIFO was granted (or not asked for).
     const std::string& realtime_message() const noexcept { return realtime_message_; }
     bool realtime() const noexcept { return realtime_; }
-    // The safety layer (emergency_stop() / reset() from any thread).
-    SafetyLayer* safety() noexcept { return safety_.get(); }
+    // Producer side of the command queue (one thread: the UI's or the lesson's). Each returns ""
+    // or one line saying why the command was refused (bad command, loop not running, queue full);
+    // a refused command is not applied and not recorded. The event is recorded at the tick that
+    // takes it; the map applies from that tick on.
+    std::string post_event(std::string_view kind, std::string_view json);
+    std::string set_workspace(const WorkspaceMap& map);
+    // Latch the emergency stop / ask the safety layer to clear its latches, at the next tick;
+    // never refused, lock-free, any thread. Both are recorded at the tick that takes them.
+    void emergency_stop() noexcept { estop_request_.store(true, std::memory_order_release); }
+    void reset_safety() noexcept { reset_request_.store(true, std::memory_order_release); }
+    SafetyState safety_state() const noexcept { return safety_ ? safety_->state() : SafetyState::Idle; }
+    // The safety settings in force (after start(): the device's limits applied).
+    const SafetyConfig& safety_config() const noexcept { return config_.safety; }
 
     // Statistics of the last run; meaningful after stop() or wait().
     ServoStats stats() const;
@@ -191,6 +225,8 @@ public:
 private:
     void run() noexcept;
     void finish();
+    std::string push(const ServoCommand& command);
+    void record_event(uint64_t tick, std::string_view kind, std::string_view json) noexcept;
 
     ServoConfig config_;
     Device* device_ = nullptr;
@@ -201,6 +237,11 @@ private:
     std::atomic<bool> stop_request_{false};
     std::atomic<bool> running_{false};
     std::atomic<bool> ready_{false};
+    std::atomic<bool> estop_request_{false};
+    std::atomic<bool> reset_request_{false};
+    std::unique_ptr<SpscQueue<ServoCommand>> commands_;
+    std::string begin_text_;        // the servo.begin event, made at start()
+    ServoCommand command_scratch_;  // servo thread: the command being applied (1 KiB, off the stack)
     Seqlock<ServoSnapshot> published_;
     bool realtime_ = false;
     std::string realtime_message_;
