@@ -3,12 +3,14 @@
 #include "sulcus/content/gltf_io.h"
 #include "sulcus/content/primitives.h"
 #include "sulcus/engine/mesh.h"
+#include "sulcus/haptics/recording.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -107,6 +109,47 @@ std::string strip_step_us(const std::string& csv) {
         out << '\n';
     }
     return out.str();
+}
+
+// The servo command with each device: a missing vendor library or device is one line and exit
+// 2; the Phantom backend on the test's fake libHD runs the loop and records the session.
+TEST_F(Cli, ServoDevicesOpenOrSayWhyNot) {
+    const std::string scene = (dir / "scene.json").string();
+    Outcome o = run_cli("servo --device phantom --scene " + scene + " --seconds 0.2", dir);
+    if (std::getenv("SULCUS_LIBHD") == nullptr) {
+        EXPECT_EQ(o.status, 2);
+        EXPECT_NE(o.err.find("libHD.so"), std::string::npos) << o.err;
+        EXPECT_EQ(count_lines(o.err), 1) << o.err;
+    }
+    o = run_cli("servo --device spacemouse --scene " + scene + " --seconds 0.2", dir);
+    if (o.status != 0) {  // no SpaceMouse attached (the usual case): one line saying so
+        EXPECT_EQ(o.status, 2);
+        EXPECT_NE(o.err.find("spacemouse"), std::string::npos) << o.err;
+        EXPECT_EQ(count_lines(o.err), 1) << o.err;
+    }
+    EXPECT_EQ(run_cli("servo --device falcon --scene " + scene, dir).status, 2);
+
+    const std::string fake = std::string(SULCUS_BINARY_DIR) + "/fake_hd/libHD.so";
+    ASSERT_TRUE(fs::exists(fake));
+    const std::string rec = (dir / "phantom.rec").string();
+    const std::string cmd = "SULCUS_LIBHD=" + fake + " " + kCli + " servo --device phantom --scene " + scene +
+                            " --seconds 0.3 --record " + rec + " >" + (dir / "out.txt").string() + " 2>&1";
+    EXPECT_EQ(std::system(cmd.c_str()), 0);
+    const RecordingRead r = read_recording(rec);
+    ASSERT_TRUE(r.ok()) << r.error;
+    EXPECT_GT(r.ticks.size(), 200u);
+    EXPECT_EQ(r.metadata.device, "phantom");
+    ASSERT_FALSE(r.events.empty());
+    EXPECT_EQ(r.events.front().kind, "servo.begin");
+}
+
+TEST_F(Cli, DevicesListsOrSaysNone) {
+    const Outcome o = run_cli("devices", dir);
+    EXPECT_EQ(o.status, 0) << o.err;
+    EXPECT_FALSE(o.out.empty());
+    const Outcome j = run_cli("devices --json", dir);
+    EXPECT_EQ(j.status, 0) << j.err;
+    EXPECT_FALSE(nlohmann::json::parse(j.out, nullptr, false).is_discarded()) << j.out;
 }
 
 }  // namespace

@@ -8,7 +8,7 @@ packages=(
   cmake ninja-build g++ pkg-config
   libglm-dev libopenmesh-dev libeigen3-dev nlohmann-json3-dev libtinygltf-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  libhidapi-dev libusb-1.0-0-dev
+  libhidapi-dev libusb-1.0-0-dev umockdev
   libglfw3-dev libimgui-dev libstb-dev
   xvfb xauth libgl1-mesa-dri
 )

@@ -23,4 +23,7 @@ int cmd_tissue(const std::vector<std::string>& args);
 extern const char* const kHelpServo;
 int cmd_servo(const std::vector<std::string>& args);
 
+extern const char* const kHelpDevices;
+int cmd_devices(const std::vector<std::string>& args);
+
 }  // namespace sulcus::cli

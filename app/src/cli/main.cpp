@@ -35,6 +35,7 @@ const char* kHelpMain =
     "  tissue [--out DIR]                    force-depth curves of the pocket-floor tissues\n"
     "  servo --device sim [--scene FILE] [--seconds N] [--record FILE]\n"
     "                                        the real-time servo loop with a device\n"
+    "  devices [--json]                      list attached haptic and 6-DOF devices\n"
     "  help [COMMAND]                        show help for a command\n"
     "\n"
     "exit status: 0 done; 1 ran, but a requested check failed; 2 bad input or usage;\n"
@@ -118,6 +119,10 @@ int cmd_help(const std::vector<std::string>& args) {
         std::fputs(kHelpServo, stdout);
         return kOk;
     }
+    if (args[0] == "devices") {
+        std::fputs(kHelpDevices, stdout);
+        return kOk;
+    }
     return usage("help: unknown command '" + args[0] + "'");
 }
 
@@ -135,6 +140,7 @@ int main(int argc, char** argv) {
         if (cmd == "content") return cmd_content(args);
         if (cmd == "tissue") return cmd_tissue(args);
         if (cmd == "servo") return cmd_servo(args);
+        if (cmd == "devices") return cmd_devices(args);
         if (cmd == "help" || cmd == "--help" || cmd == "-h") return cmd_help(args);
         return usage("unknown command '" + cmd + "'");
     } catch (const std::exception& e) {
