@@ -19,31 +19,7 @@
 #include <random>
 #include <vector>
 
-// Count every global operator new in this executable, so a test can prove the solver never
-// allocates.
-namespace {
-std::atomic<long> g_new_calls{0};
-}
-
-// GCC pairs the inlined replacement new with the free() in the replacement delete and warns
-// about a mismatch that is not one: both sides are ours and use malloc/free.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-void* operator new(std::size_t n) {
-    g_new_calls.fetch_add(1, std::memory_order_relaxed);
-    if (void* p = std::malloc(n ? n : 1)) return p;
-    throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) {
-    g_new_calls.fetch_add(1, std::memory_order_relaxed);
-    if (void* p = std::malloc(n ? n : 1)) return p;
-    throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-#pragma GCC diagnostic pop
+#include "allocation_counter.h"
 
 namespace sulcus::qp {
 namespace {
@@ -724,19 +700,19 @@ TEST(Qp, SolveDoesNotAllocate) {
     auto bad = empty_problem();
     bad->weight[0] = -1;
     Solution s;
-    const long before = g_new_calls.load();
+    const long before = sulcus::test::heap_allocations();
     {  // the counter itself must work
         auto probe = std::make_unique<int>(1);
-        EXPECT_EQ(g_new_calls.load(), before + 1);
+        EXPECT_EQ(sulcus::test::heap_allocations(), before + 1);
     }
-    const long start = g_new_calls.load();
+    const long start = sulcus::test::heap_allocations();
     int optimal = 0;
     for (const auto& p : problems) {
         optimal += solve(*p, Settings{}, nullptr, s) == Status::Optimal;
         solve(*p, Settings{}, &warm, s);
     }
     solve(*bad, Settings{}, nullptr, s);
-    const long end = g_new_calls.load();
+    const long end = sulcus::test::heap_allocations();
     EXPECT_EQ(end, start);
     EXPECT_GT(optimal, 0);
 }
@@ -1047,7 +1023,7 @@ TEST(Qp, EverySizeIsDeterministicAndDoesNotAllocate) {
     warm.count = kMaxVars;
     for (int k = 0; k < kMaxVars; ++k) warm.active[k] = k % 3 ? k : kBoxLower + k;
     Solution again, warmed;
-    const long start = g_new_calls.load();
+    const long start = sulcus::test::heap_allocations();
     int same = 0, optimal = 0;
     // In reverse order, so no state can carry over from the previous call.
     for (size_t k = problems.size(); k-- > 0;) {
@@ -1055,7 +1031,7 @@ TEST(Qp, EverySizeIsDeterministicAndDoesNotAllocate) {
         same += same_bits(first[k], again);
         optimal += solve(*problems[k], Settings{}, &warm, warmed) == Status::Optimal;
     }
-    const long end = g_new_calls.load();
+    const long end = sulcus::test::heap_allocations();
     EXPECT_EQ(end, start);
     EXPECT_EQ(same, static_cast<int>(problems.size()));
     EXPECT_GT(optimal, 0);

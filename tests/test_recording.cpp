@@ -23,17 +23,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-// Counts heap allocations so the producer calls can be shown not to allocate.
-namespace {
-std::atomic<long> g_allocations{0};
-}
-void* operator new(std::size_t n) {
-    g_allocations.fetch_add(1, std::memory_order_relaxed);
-    if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-    throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#include "allocation_counter.h"
 
 namespace sulcus {
 namespace {
@@ -400,15 +390,15 @@ TEST(Recording, ProducerCallsDoNotAllocate) {
     ASSERT_EQ(w.open(path, test_metadata(), no_sync()), "");
     const TickSample s = awkward_tick(7);
     const std::string json(1000, 'x');
-    const long before = g_allocations.load();
+    const long before = sulcus::test::heap_allocations();
     for (int i = 0; i < 2000; ++i) w.add_tick(s);
     for (int i = 0; i < 50; ++i) w.add_event(7, "site_charted", json);
-    const long after = g_allocations.load();
+    const long after = sulcus::test::heap_allocations();
     EXPECT_EQ(after, before);
     // Flushing allocates nothing either once open (the chunk buffers are preallocated).
-    const long before_flush = g_allocations.load();
+    const long before_flush = sulcus::test::heap_allocations();
     ASSERT_EQ(w.flush(), "");
-    EXPECT_EQ(g_allocations.load(), before_flush);
+    EXPECT_EQ(sulcus::test::heap_allocations(), before_flush);
     ASSERT_EQ(w.close(), "");
     EXPECT_EQ(read_recording(path).ticks.size(), 2000u);
 }

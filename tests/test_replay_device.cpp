@@ -25,22 +25,7 @@
 #include <string>
 #include <vector>
 
-namespace {
-std::atomic<long> g_news{0};
-}
-
-// Counts heap allocations in this executable (read()/write() must make none). The replacement
-// pairs malloc with free; GCC cannot see that once it inlines them, hence the pragma.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-void* operator new(std::size_t n) {
-    ++g_news;
-    if (void* p = std::malloc(n ? n : 1)) return p;
-    throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-#pragma GCC diagnostic pop
+#include "allocation_counter.h"
 
 namespace sulcus {
 namespace {
@@ -250,7 +235,7 @@ TEST_F(Replay, DeviceReplaysPosesAndStoresWrites) {
     ASSERT_TRUE(dev.read(s));
     EXPECT_EQ(dev.cursor(), 0u);
 
-    const long before = g_news.load();
+    const long before = sulcus::test::heap_allocations();
     for (std::size_t i = 0; i < rec_->ticks.size(); ++i) {
         const TickSample& t = rec_->ticks[i];
         ASSERT_TRUE(dev.read(s));
@@ -268,7 +253,7 @@ TEST_F(Replay, DeviceReplaysPosesAndStoresWrites) {
     EXPECT_TRUE(s.connected);
     EXPECT_TRUE(same_bits(s.pose.position, rec_->ticks.back().device_pose.position));
     dev.write(Vec3(-1.0), Vec3(-1.0));
-    EXPECT_EQ(g_news.load() - before, 0) << "read()/write() allocated";
+    EXPECT_EQ(sulcus::test::heap_allocations() - before, 0) << "read()/write() allocated";
     EXPECT_EQ(dev.writes_past_end(), 1u);
     ASSERT_EQ(dev.writes_stored(), rec_->ticks.size());
     EXPECT_EQ(dev.forces_written().back(), Vec3(double(rec_->ticks.size() - 1), 0.0, 1.0));
@@ -278,9 +263,9 @@ TEST_F(Replay, DeviceReplaysPosesAndStoresWrites) {
     EXPECT_EQ(rec_->ticks.front().buttons, 0u);
 
     // The counter does count: a vector allocates once.
-    const long probe = g_news.load();
+    const long probe = sulcus::test::heap_allocations();
     std::vector<double> v(3);
-    EXPECT_EQ(g_news.load() - probe, 1);
+    EXPECT_EQ(sulcus::test::heap_allocations() - probe, 1);
     dev.stop();
     EXPECT_FALSE(dev.read(s));
 }

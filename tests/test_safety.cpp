@@ -12,18 +12,7 @@
 #include <random>
 #include <utility>
 
-namespace {
-std::atomic<long> g_news{0};
-}
-
-// Counts heap allocations in this executable (for the no-allocation test).
-void* operator new(std::size_t n) {
-    ++g_news;
-    if (void* p = std::malloc(n ? n : 1)) return p;
-    throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#include "allocation_counter.h"
 
 namespace sulcus {
 namespace {
@@ -438,7 +427,7 @@ TEST(Safety, TickNeitherAllocatesNorThrows) {
     static_assert(noexcept(std::declval<SafetyLayer&>().emergency_stop()));
     static_assert(noexcept(std::declval<SafetyLayer&>().reset()));
     SafetyLayer s;
-    const long before = g_news.load();
+    const long before = sulcus::test::heap_allocations();
     const Vec3 f(0, 2.0, 0);
     for (int i = 0; i < 3; ++i) s.tick(good(Vec3(0.0)));
     for (int i = 0; i < 600; ++i) s.tick(good(f));
@@ -451,12 +440,12 @@ TEST(Safety, TickNeitherAllocatesNorThrows) {
     s.tick(good(Vec3(0.0)));
     s.emergency_stop();
     s.tick(good(f));
-    EXPECT_EQ(g_news.load() - before, 0);
+    EXPECT_EQ(sulcus::test::heap_allocations() - before, 0);
     // The counter does count.
-    const long probe = g_news.load();
+    const long probe = sulcus::test::heap_allocations();
     int* volatile p = new int(1);
     delete p;
-    EXPECT_EQ(g_news.load() - probe, 1);
+    EXPECT_EQ(sulcus::test::heap_allocations() - probe, 1);
 }
 
 }  // namespace

@@ -16,17 +16,7 @@
 #include <thread>
 #include <vector>
 
-// Counts heap allocations so read()/write() can be shown not to allocate.
-namespace {
-std::atomic<long> g_allocations{0};
-}
-void* operator new(std::size_t n) {
-    g_allocations.fetch_add(1, std::memory_order_relaxed);
-    if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-    throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#include "allocation_counter.h"
 
 namespace sulcus {
 namespace {
@@ -303,14 +293,14 @@ TEST(SpaceMouseDevice, ReadAndWriteDoNotAllocate) {
     ASSERT_EQ(dev.start(), "");
     ASSERT_TRUE(wait_for([&] { return dev.reports_parsed() == 3; }));
     DeviceSample sample;
-    const long before = g_allocations.load();
+    const long before = sulcus::test::heap_allocations();
     for (int i = 0; i < 5000; ++i) {
         dev.read(sample);
         dev.write(Vec3(0.1 * i, 0.0, 0.0), Vec3(0.0));
     }
     dev.write(Vec3(std::nan(""), 0.0, 0.0), Vec3(0.0));
     dev.read(sample);
-    EXPECT_EQ(g_allocations.load(), before);
+    EXPECT_EQ(sulcus::test::heap_allocations(), before);
     EXPECT_NE(sample.pose.position, start_pose().position);  // it did move
 }
 

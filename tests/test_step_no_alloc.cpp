@@ -7,17 +7,7 @@
 #include <new>
 #include <vector>
 
-namespace {
-std::atomic<long> g_news{0};
-}
-
-void* operator new(std::size_t n) {
-    ++g_news;
-    if (void* p = std::malloc(n ? n : 1)) return p;
-    throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#include "allocation_counter.h"
 
 using namespace sulcus;
 using namespace sulcus::test;
@@ -30,7 +20,7 @@ TEST(StepAllocation, NoHeapAllocationAfterTheFirstStep) {
     auto model = model_of(make_box(Vec3(2 * mm)), {object("ell", make_extruded_polygon(ell, -10 * mm, 10 * mm))});
     State st = make_state(pose(Vec3(-10 * mm, 3 * mm, 0)));
     step(*model, st, pose(Vec3(-10 * mm, 3 * mm, 0)));  // warm-up: the workspace is made here
-    const long before = g_news.load();
+    const long before = sulcus::test::heap_allocations();
     int contact = 0;
     for (int i = 1; i <= 3000; ++i) {
         const double f = i / 3000.0;
@@ -39,12 +29,12 @@ TEST(StepAllocation, NoHeapAllocationAfterTheFirstStep) {
         const StepResult r = step(*model, st, h);
         if (r.status == StepStatus::Contact) ++contact;
     }
-    EXPECT_EQ(g_news.load() - before, 0);
+    EXPECT_EQ(sulcus::test::heap_allocations() - before, 0);
     EXPECT_GT(contact, 1000);
     // The counter does count: a vector allocates once.
-    const long probe = g_news.load();
+    const long probe = sulcus::test::heap_allocations();
     std::vector<double> v(static_cast<size_t>(contact));
-    EXPECT_EQ(g_news.load() - probe, 1);
+    EXPECT_EQ(sulcus::test::heap_allocations() - probe, 1);
     EXPECT_EQ(v.size(), static_cast<size_t>(contact));
 }
 
@@ -78,7 +68,7 @@ TEST(StepAllocation, NoHeapAllocationWithPiecesCompliantZonesAndFriction) {
     ASSERT_TRUE(b.model->any_compliant && b.model->any_friction);
     State st = make_state(pose(Vec3(0, 0.2 * mm, 0)));
     step(*b.model, st, pose(Vec3(0, 0.2 * mm, 0)));  // warm-up
-    const long before = g_news.load();
+    const long before = sulcus::test::heap_allocations();
     int soft = 0;
     for (int i = 1; i <= 3000; ++i) {
         const double f = i / 3000.0;
@@ -86,6 +76,6 @@ TEST(StepAllocation, NoHeapAllocationWithPiecesCompliantZonesAndFriction) {
         const StepResult r = step(*b.model, st, h);
         soft += r.stats.soft_zones > 0;
     }
-    EXPECT_EQ(g_news.load() - before, 0);
+    EXPECT_EQ(sulcus::test::heap_allocations() - before, 0);
     EXPECT_GT(soft, 1000);
 }
