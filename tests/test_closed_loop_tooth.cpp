@@ -9,6 +9,8 @@
 #include "sulcus/engine/scene_file.h"
 #include "sulcus/haptics/sim_device.h"
 
+#include "closed_loop_helpers.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -22,6 +24,10 @@ namespace {
 
 using json = nlohmann::json;
 constexpr double mm = 1e-3;
+using test::Key;
+using test::Range;
+using test::smooth_script;
+using test::Window;
 
 Vec3 vec(const json& j) { return Vec3(j[0].get<double>(), j[1].get<double>(), j[2].get<double>()); }
 
@@ -79,28 +85,6 @@ Fixture load(const std::string& case_name, const std::string& site_name, double 
     return f;
 }
 
-// Keyframes joined by smoothstep, sampled every 2 ms.
-struct Key {
-    double t;
-    Vec3 p;
-};
-
-std::vector<TrajectorySample> smooth(const std::vector<Key>& keys, const Quat& q) {
-    std::vector<TrajectorySample> out;
-    for (size_t k = 0; k + 1 < keys.size(); ++k) {
-        const int rows = static_cast<int>(std::lround((keys[k + 1].t - keys[k].t) / 0.002));
-        for (int i = (k == 0 ? 0 : 1); i <= rows; ++i) {
-            const double u = static_cast<double>(i) / rows, s = u * u * (3.0 - 2.0 * u);
-            out.push_back({keys[k].t + (keys[k + 1].t - keys[k].t) * u,
-                           Pose{keys[k].p + (keys[k + 1].p - keys[k].p) * s, q}});
-        }
-    }
-    return out;
-}
-
-struct Window {
-    double from, to;
-};
 constexpr Window kPressEarly{1.3, 1.7}, kPressLate{1.7, 2.1};
 constexpr Window kWalkEarly{2.9, 3.3}, kWalkLate{3.3, 3.7};
 constexpr double kScriptEnd_s = 3.7;
@@ -110,7 +94,7 @@ constexpr double kScriptEnd_s = 3.7;
 std::vector<TrajectorySample> probe_script(const Site& s) {
     const Vec3 press = s.floor_point - 1.3 * mm * s.axis;
     const Vec3 walked = press + 0.2 * mm * s.along;
-    return smooth({{0.0, s.start.position}, {0.3, s.start.position}, {1.1, press}, {2.1, press}, {2.7, walked},
+    return smooth_script({{0.0, s.start.position}, {0.3, s.start.position}, {1.1, press}, {2.1, press}, {2.7, walked},
                    {kScriptEnd_s, walked}},
                   s.start.orientation);
 }
@@ -143,24 +127,7 @@ Trace run(const Fixture& f, const HandParameters& hand_parameters) {
     return tr;
 }
 
-struct Span {
-    double lo = 1e300, hi = -1e300, sum = 0.0;
-    int n = 0;
-    double span() const { return hi - lo; }
-    double mean() const { return n ? sum / n : 0.0; }
-};
-
-Span span(const Trace& tr, const std::vector<double>& v, Window w) {
-    Span s;
-    for (size_t i = 0; i < v.size(); ++i)
-        if (tr.t[i] >= w.from && tr.t[i] < w.to) {
-            s.lo = std::min(s.lo, v[i]);
-            s.hi = std::max(s.hi, v[i]);
-            s.sum += v[i];
-            ++s.n;
-        }
-    return s;
-}
+Range span(const Trace& tr, const std::vector<double>& v, Window w) { return test::range(tr.t, v, w); }
 
 struct Verdict {
     bool stable = true;
@@ -183,8 +150,8 @@ Verdict judge(const Trace& tr, double quantum_N, double resolution_m = 0.0) {
         v.why = "NaN or held steps; ";
     }
     for (const auto& [early, late] : {std::pair{kPressEarly, kPressLate}, std::pair{kWalkEarly, kWalkLate}}) {
-        const Span fe = span(tr, tr.normal_N, early), fl = span(tr, tr.normal_N, late);
-        const Span ee = span(tr, tr.energy_J, early), el = span(tr, tr.energy_J, late);
+        const Range fe = span(tr, tr.normal_N, early), fl = span(tr, tr.normal_N, late);
+        const Range ee = span(tr, tr.energy_J, early), el = span(tr, tr.energy_J, late);
         v.force_N = fl.mean();
         v.ripple_N = std::max(v.ripple_N, fl.span());
         v.energy_ripple_J = std::max(v.energy_ripple_J, el.span());

@@ -6,6 +6,8 @@
 #include "sulcus/haptics/device.h"
 #include "sulcus/haptics/sim_device.h"
 
+#include "closed_loop_helpers.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -19,27 +21,10 @@ namespace sulcus {
 namespace {
 
 constexpr double mm = 1e-3;
-
-// Keyframes joined by smoothstep, sampled every 2 ms (the hand interpolates linearly between).
-struct Key {
-    double t;
-    Vec3 p;
-};
-
-std::vector<TrajectorySample> smooth_script(const std::vector<Key>& keys) {
-    std::vector<TrajectorySample> out;
-    for (size_t k = 0; k + 1 < keys.size(); ++k) {
-        const Key& a = keys[k];
-        const Key& b = keys[k + 1];
-        const int rows = static_cast<int>(std::lround((b.t - a.t) / 0.002));
-        for (int i = (k == 0 ? 0 : 1); i <= rows; ++i) {
-            const double u = static_cast<double>(i) / rows;
-            const double s = u * u * (3.0 - 2.0 * u);
-            out.push_back({a.t + (b.t - a.t) * u, Pose{a.p + (b.p - a.p) * s, Quat(1, 0, 0, 0)}});
-        }
-    }
-    return out;
-}
+using test::Key;
+using test::Range;
+using test::smooth_script;
+using test::Window;
 
 // The press: the cube starts centred in the cavity (0.5 mm above the floor); the hand's target
 // goes 7 mm down (6.5 mm past the floor, about 1.5-2 N through the 300 N/m grip), holds, slides
@@ -51,9 +36,6 @@ std::vector<TrajectorySample> press_and_slide_script() {
 }
 
 // Time windows (s): early and late halves of the settled part of each hold.
-struct Window {
-    double from, to;
-};
 constexpr Window kPressEarly{0.9, 1.3}, kPressLate{1.3, 1.7};
 constexpr Window kSlideEarly{2.9, 3.3}, kSlideLate{3.3, 3.7};
 
@@ -109,24 +91,7 @@ Trace run_press(double stiffness_N_per_m, const HandParameters& hand_parameters 
     return tr;
 }
 
-struct Range {
-    double lo = 1e300, hi = -1e300, sum = 0;
-    int n = 0;
-    double span() const { return hi - lo; }
-    double mean() const { return n ? sum / n : 0.0; }
-};
-
-Range range(const Trace& tr, const std::vector<double>& v, Window w) {
-    Range r;
-    for (size_t i = 0; i < v.size(); ++i) {
-        if (tr.t[i] < w.from || tr.t[i] >= w.to) continue;
-        r.lo = std::min(r.lo, v[i]);
-        r.hi = std::max(r.hi, v[i]);
-        r.sum += v[i];
-        ++r.n;
-    }
-    return r;
-}
+Range range(const Trace& tr, const std::vector<double>& v, Window w) { return test::range(tr.t, v, w); }
 
 // Stability of a held press: no NaN or held step; in contact, pressing down; the fluctuation of
 // the normal force late in the hold is small (below 0.02 N or 2 % of the force, whichever is
