@@ -1,6 +1,7 @@
 // The servo loop on its own thread for about a second: a simulated hand presses a 5 mm cube
 // onto a slab (scene built in code) through the real renderer step and safety layer, while a
 // reader thread takes published snapshots and a recorder writes the session.
+#include "allocation_counter.h"
 #include "scene_helpers.h"
 
 #include "sulcus/content/primitives.h"
@@ -16,6 +17,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -341,6 +343,202 @@ TEST(ServoLoop, CommandsAreAppliedRecordedAndReplayedBitForBit) {
     ASSERT_TRUE(rb.ok()) << rb.error;
     EXPECT_GE(rb.first_mismatch, map_tick);
     std::filesystem::remove(path);
+}
+
+// The press scene of the tests above: a 5 mm cube tool and a slab 0.5 mm below it.
+std::unique_ptr<Model> press_model() {
+    const TriMesh tool = make_box(Vec3(2.5 * mm));
+    const TriMesh slab = make_box(Vec3(20 * mm, 2 * mm, 20 * mm), Vec3(0.0, -5.0 * mm, 0.0));
+    return test::model_of(tool, {test::object("slab", slab)});
+}
+
+// A simulated hand whose read() busy-waits `stall_us` on every `every`-th call: ticks that overrun
+// their deadline on purpose. No allocation, no sleep (the wait is on the servo thread's clock).
+class StallingHand final : public Device {
+public:
+    StallingHand(std::vector<TrajectorySample> script, HandParameters hp, int every, int stall_us)
+        : hand_(std::move(script), hp), every_(every), stall_us_(stall_us) {}
+    const DeviceCapabilities& capabilities() const override { return hand_.capabilities(); }
+    std::string start() override { return hand_.start(); }
+    bool read(DeviceSample& sample) noexcept override {
+        if (++reads_ % every_ == 0) {
+            const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(stall_us_);
+            while (std::chrono::steady_clock::now() < until) {
+            }
+        }
+        return hand_.read(sample);
+    }
+    void write(const Vec3& f, const Vec3& t) noexcept override { hand_.write(f, t); }
+    void stop() override { hand_.stop(); }
+
+private:
+    SimulatedHand hand_;
+    int every_, stall_us_;
+    long reads_ = 0;
+};
+
+// With a consumer draining as it goes (a queue large enough for a loaded machine), the telemetry
+// holds every tick once, in order, and each sample is the tick the loop sent: its force bit for bit
+// and its step time as recorded in the trace.
+TEST(ServoTelemetry, EveryTickOnceInOrderWhenDrained) {
+    const std::unique_ptr<Model> model = press_model();
+    ASSERT_TRUE(model);
+    ServoConfig config;
+    config.duration_s = 0.6;
+    config.safety.limits.max_force_N = 1.0;
+    config.trace_ticks = 2000;
+    config.telemetry_queue = 2048;
+    HandParameters hp;
+    hp.dt_s = 1e-3;
+    SimulatedHand hand(press_script(), hp);
+
+    ServoLoop loop;
+    ASSERT_EQ(loop.start(config, hand, *model), "");
+    std::vector<ServoSnapshot> got;
+    got.reserve(4096);
+    ServoSnapshot s;
+    while (loop.running()) {
+        while (loop.pop_telemetry(s)) got.push_back(s);
+        std::this_thread::sleep_for(std::chrono::milliseconds(16));  // a UI frame
+    }
+    loop.wait();
+    while (loop.pop_telemetry(s)) got.push_back(s);
+    const ServoStats st = loop.stats();
+
+    EXPECT_EQ(st.telemetry_drops, 0u);
+    ASSERT_GT(st.ticks, 100u);
+    ASSERT_EQ(got.size(), st.ticks);
+    ASSERT_EQ(loop.trace_size(), st.ticks);
+    uint64_t misses = 0;
+    for (std::size_t i = 0; i < got.size(); ++i) {
+        const ServoSnapshot& g = got[i];
+        const TickSample& t = loop.trace()[i];
+        ASSERT_EQ(g.tick, i);
+        ASSERT_EQ(g.tick_check, i);
+        ASSERT_EQ(g.telemetry_drops, 0u);
+        ASSERT_GE(g.deadline_misses, misses) << "tick " << i;  // cumulative
+        misses = g.deadline_misses;
+        if (i > 0) {
+            ASSERT_GT(g.time_s, got[i - 1].time_s) << "tick " << i;
+        }
+        ASSERT_EQ(std::memcmp(&g.force_N, &t.force_N, sizeof(Vec3)), 0) << "tick " << i;
+        ASSERT_EQ(g.step_us, t.step_us) << "tick " << i;
+        ASSERT_EQ(g.step_us >= 0.0f, g.device_ok) << "tick " << i;
+    }
+    EXPECT_EQ(misses, st.deadline_misses);
+    // Not vacuous: the press reached the slab.
+    EXPECT_GT(st.status_counts[static_cast<int>(StepStatus::Contact)], 0u);
+    // Off by default: a loop started without telemetry gives none.
+    ServoLoop quiet;
+    ServoConfig off = config;
+    off.telemetry_queue = 0;
+    off.duration_s = 0.05;
+    SimulatedHand hand2(press_script(), hp);
+    ASSERT_EQ(quiet.start(off, hand2, *model), "");
+    quiet.wait();
+    EXPECT_GT(quiet.stats().ticks, 0u);
+    EXPECT_FALSE(quiet.pop_telemetry(s));
+}
+
+// Nobody drains: the queue keeps the first ticks it had room for, every later tick is dropped and
+// counted, and the loop keeps its rate.
+TEST(ServoTelemetry, DropsAreCountedWhenNobodyDrains) {
+    const std::unique_ptr<Model> model = press_model();
+    ASSERT_TRUE(model);
+    ServoConfig config;
+    config.duration_s = 0.3;
+    config.telemetry_queue = 50;  // rounded up to 64
+    HandParameters hp;
+    hp.dt_s = 1e-3;
+    SimulatedHand hand(press_script(), hp);
+    ServoLoop loop;
+    ASSERT_EQ(loop.start(config, hand, *model), "");
+    loop.wait();
+    const ServoStats st = loop.stats();
+    ASSERT_GT(st.ticks, 200u);
+    EXPECT_EQ(st.telemetry_drops, st.ticks - 64);
+    ServoSnapshot last;
+    ASSERT_TRUE(loop.latest(last));
+    EXPECT_EQ(last.telemetry_drops, st.telemetry_drops);  // the published one counts its own drop
+
+    std::vector<ServoSnapshot> got;
+    ServoSnapshot s;
+    while (loop.pop_telemetry(s)) got.push_back(s);
+    ASSERT_EQ(got.size(), 64u);
+    for (std::size_t i = 0; i < got.size(); ++i) {
+        EXPECT_EQ(got[i].tick, i);
+        EXPECT_EQ(got[i].telemetry_drops, 0u);  // queued before the first drop
+    }
+    EXPECT_GT(st.achieved_rate_hz, 0.8 * config.rate_hz);
+
+    ServoConfig too_big = config;
+    too_big.telemetry_queue = (1u << 20) + 1;
+    ServoLoop refused;
+    EXPECT_NE(refused.start(too_big, hand, *model), "");
+}
+
+// Ticks that overrun on purpose (a 2.5 ms stall every 25th read at 1 kHz): the last snapshot, as
+// published and as queued, carries the loop's final miss count, and the count grows by the ticks
+// that overran.
+TEST(ServoTelemetry, LastSnapshotCarriesTheFinalDeadlineMisses) {
+    const std::unique_ptr<Model> model = press_model();
+    ASSERT_TRUE(model);
+    ServoConfig config;
+    config.telemetry_queue = 4096;
+    HandParameters hp;
+    hp.dt_s = 1e-3;
+    StallingHand hand(press_script(), hp, 25, 2500);
+    ServoLoop loop;
+    ASSERT_EQ(loop.start(config, hand, *model), "");
+    std::this_thread::sleep_for(std::chrono::milliseconds(400));
+    loop.stop();  // at an arbitrary tick
+    const ServoStats st = loop.stats();
+    EXPECT_GE(st.deadline_misses, 8u);  // at least the stalled ticks (about 16 in 0.4 s)
+    EXPECT_GT(st.skipped_slots, 0u);
+    ServoSnapshot last;
+    ASSERT_TRUE(loop.latest(last));
+    EXPECT_EQ(last.tick + 1, st.ticks);
+    EXPECT_EQ(last.deadline_misses, st.deadline_misses);
+    ServoSnapshot s, queued_last;
+    uint64_t n = 0;
+    while (loop.pop_telemetry(s)) {
+        queued_last = s;
+        ++n;
+    }
+    ASSERT_EQ(n, st.ticks);
+    EXPECT_EQ(queued_last.tick, last.tick);
+    EXPECT_EQ(queued_last.deadline_misses, st.deadline_misses);
+}
+
+// The servo thread allocates nothing while it ticks with telemetry on and a consumer draining it
+// (the queue is allocated in start()).
+TEST(ServoTelemetry, NoAllocationInTicksWithTelemetry) {
+    const std::unique_ptr<Model> model = press_model();
+    ASSERT_TRUE(model);
+    ServoConfig config;
+    config.telemetry_queue = 256;
+    config.try_realtime = false;
+    HandParameters hp;
+    hp.dt_s = 1e-3;
+    SimulatedHand hand(press_script(), hp);
+    ServoLoop loop;
+    ASSERT_EQ(loop.start(config, hand, *model), "");
+    ServoSnapshot s;
+    while (!loop.latest(s)) std::this_thread::yield();
+    const long before = test::heap_allocations();
+    uint64_t taken = 0;
+    for (int frame = 0; frame < 30; ++frame) {  // about 0.5 s of contact and drops-free draining
+        while (loop.pop_telemetry(s)) ++taken;
+        std::this_thread::sleep_for(std::chrono::milliseconds(16));
+    }
+    const long during = test::heap_allocations() - before;
+    loop.stop();
+    EXPECT_EQ(during, 0);
+    EXPECT_GT(taken, 300u);
+    const long probe = test::heap_allocations();  // the counter does count here
+    std::vector<double> v(3);
+    EXPECT_EQ(test::heap_allocations() - probe, 1);
+    EXPECT_GT(loop.stats().status_counts[static_cast<int>(StepStatus::Contact)], 0u);
 }
 
 }  // namespace

@@ -57,6 +57,7 @@ std::string ServoLoop::start(const ServoConfig& config, Device& device, const Mo
     if (!valid_workspace(config.workspace)) return "servo: workspace offset must be finite and scale in [0.001, 1000]";
     if (config.command_queue < 1 || config.command_queue > (1u << 16) || config.commands_per_tick < 1)
         return "servo: command_queue must be 1..65536 and commands_per_tick at least 1";
+    if (config.telemetry_queue > (1u << 20)) return "servo: telemetry_queue must be 0..1048576";
     config_ = config;
     config_.safety.nominal_dt_s = 1.0 / config_.rate_hz;
     config_.step_time_ring = std::max<std::size_t>(config_.step_time_ring, 1);
@@ -79,6 +80,8 @@ std::string ServoLoop::start(const ServoConfig& config, Device& device, const Mo
     // Everything the ticks touch is allocated here.
     safety_ = std::make_unique<SafetyLayer>(config_.safety);
     commands_ = std::make_unique<SpscQueue<ServoCommand>>(config_.command_queue);
+    telemetry_.reset();
+    if (config_.telemetry_queue > 0) telemetry_ = std::make_unique<SpscQueue<ServoSnapshot>>(config_.telemetry_queue);
     estop_request_.store(false);
     reset_request_.store(false);
     trace_.assign(config_.trace_ticks, TickSample{});
@@ -262,6 +265,12 @@ void ServoLoop::run() noexcept {
         if (recorder_ && !recorder_->add_tick(ts)) ++counts_.record_drops;
         if (trace_count_ < trace_.size()) trace_[trace_count_++] = ts;
 
+        // Deadline check: the work must end before the next deadline. Judged before publishing
+        // (the only step after it), so the snapshot's miss count includes this tick.
+        const int64_t end = now_ns();
+        prev_overran = end > deadline + period_ns;
+        if (prev_overran) ++counts_.deadline_misses;
+
         ServoSnapshot snap;
         snap.tick = tick;
         snap.time_s = time_s;
@@ -272,17 +281,18 @@ void ServoLoop::run() noexcept {
         snap.safety = out.state;
         snap.status = result.status;
         snap.device_ok = o.read_ok;
+        snap.deadline_misses = counts_.deadline_misses;
+        snap.step_us = static_cast<float>(o.step_us);
+        snap.telemetry_drops = counts_.telemetry_drops;
         snap.tick_check = tick;
+        // A queued sample carries the drops before it; the published one also counts its own.
+        if (telemetry_ && !telemetry_->push(snap)) snap.telemetry_drops = ++counts_.telemetry_drops;
         published_.store(snap);
         ++tick;
 
-        // Deadline bookkeeping: the work must end before the next deadline. After an overrun
-        // the missed slots are dropped rather than run back to back.
-        const int64_t end = now_ns();
+        // After an overrun the missed slots are dropped rather than run back to back.
         deadline += period_ns;
-        prev_overran = end > deadline;
         if (prev_overran) {
-            ++counts_.deadline_misses;
             const int64_t behind = end - deadline;
             const int64_t skip = behind / period_ns + 1;
             if (skip > 1) {

@@ -112,6 +112,12 @@ struct ServoSnapshot {
     SafetyState safety = SafetyState::Idle;
     StepStatus status = StepStatus::Free;
     bool device_ok = false;    // read() gave a sample
+    // Live figures for a UI. Ticks whose work ended after the next deadline, so far (this tick
+    // included); the renderer step's wall time this tick (us; < 0 when no step ran); telemetry
+    // samples dropped so far because the queue was full (ServoConfig::telemetry_queue).
+    uint64_t deadline_misses = 0;
+    float step_us = -1.0f;
+    uint64_t telemetry_drops = 0;
     uint64_t tick_check = 0;   // == tick
 };
 
@@ -140,6 +146,11 @@ struct ServoConfig {
     std::size_t command_queue = 256;
     // At most this many queued commands are taken per tick; the rest wait for the next.
     int commands_per_tick = 8;
+    // Telemetry: when > 0, every tick's snapshot is also queued (capacity rounded up to a power of
+    // two, at most 1 << 20) for one consumer thread (ServoLoop::pop_telemetry), e.g. a UI that
+    // drains it each frame to plot forces. The servo thread never waits for it: a full queue drops
+    // the sample and counts it (ServoStats::telemetry_drops). 0: no telemetry.
+    std::size_t telemetry_queue = 0;
 };
 
 // Period histogram: 0 .. 5 ms in 10 us bins, plus one overflow bin.
@@ -166,6 +177,7 @@ struct ServoStats {
     uint64_t record_drops = 0;       // recorder.add_tick() refused (ring full)
     uint64_t event_drops = 0;        // recorder.add_event() refused (ring full or too long)
     uint64_t commands = 0;           // queued commands applied
+    uint64_t telemetry_drops = 0;    // telemetry samples dropped (queue full)
     std::array<uint64_t, kStepStatusCount> status_counts{};
     std::array<uint64_t, 6> safety_counts{};  // ticks per SafetyState (enum order)
     double max_force_sent_N = 0.0;
@@ -199,6 +211,10 @@ public:
 
     // The latest tick's outcome; false before the first tick. Lock-free, any thread.
     bool latest(ServoSnapshot& out) const noexcept { return published_.load(out); }
+    // Consumer side of the telemetry queue (ServoConfig::telemetry_queue; one thread only): the
+    // oldest tick not yet taken, in tick order; false when empty or telemetry is off. What is left
+    // after stop() can still be drained; a new start() discards it (no pop may run during start()).
+    bool pop_telemetry(ServoSnapshot& out) noexcept { return telemetry_ && telemetry_->pop(out); }
     // Set once start() has returned; "" when SCHED_FIFO was granted (or not asked for).
     const std::string& realtime_message() const noexcept { return realtime_message_; }
     bool realtime() const noexcept { return realtime_; }
@@ -240,6 +256,7 @@ private:
     std::atomic<bool> estop_request_{false};
     std::atomic<bool> reset_request_{false};
     std::unique_ptr<SpscQueue<ServoCommand>> commands_;
+    std::unique_ptr<SpscQueue<ServoSnapshot>> telemetry_;  // null when telemetry is off
     std::string begin_text_;        // the servo.begin event, made at start()
     ServoCommand command_scratch_;  // servo thread: the command being applied (1 KiB, off the stack)
     Seqlock<ServoSnapshot> published_;
