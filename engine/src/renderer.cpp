@@ -576,9 +576,16 @@ void gather_atoms(const Model& model, double reach, double soft, const Vec3& pus
         const Vec3 eo = v1 - v0;
         const Vec3 bisector = obj.topology.triangle_normals[e.tri[0]] + obj.topology.triangle_normals[e.tri[1]];
         const ToolPiece& piece = tool.pieces[w.oedges[i].piece];
+        // Two segments are no closer than their midpoints' distance less both half lengths: a
+        // cheap bound that skips the tool edges out of reach before the exact closest points.
+        const Vec3 mid_o = 0.5 * (v0 + v1);
+        const double half_o = 0.5 * glm::length(eo);
         for (size_t te = piece.edge_begin; te < piece.edge_begin + piece.edge_count; ++te) {
             const Vec3& a0 = w.tool_world[tool.edges[te][0]];
             const Vec3& a1 = w.tool_world[tool.edges[te][1]];
+            const double bound = reach_of(obj) + half_o + 0.5 * glm::length(a1 - a0);
+            const Vec3 between = 0.5 * (a0 + a1) - mid_o;
+            if (glm::dot(between, between) > bound * bound) continue;
             const SegmentClosest sc = closest_segments(a0, a1, v0, v1);
             if (sc.distance > reach_of(obj)) continue;
             if (sc.s <= 1e-9 || sc.s >= 1.0 - 1e-9 || sc.t <= 1e-9 || sc.t >= 1.0 - 1e-9) continue;
