@@ -278,6 +278,8 @@ void ServoLoop::run() noexcept {
         snap.graphic = result.graphic;
         snap.force_N = out.force_N;
         snap.torque_Nm = out.torque_Nm;
+        snap.rendered_force_N = result.force_N;
+        snap.rendered_torque_Nm = result.torque_Nm;
         snap.safety = out.state;
         snap.status = result.status;
         snap.device_ok = o.read_ok;

@@ -109,6 +109,11 @@ struct ServoSnapshot {
     Pose graphic;              // the renderer's graphic pose
     Vec3 force_N{0.0};         // sent to the device (after the safety layer)
     Vec3 torque_Nm{0.0};
+    // The renderer's wrench this tick (eq. 4, before the safety layer): what the probe presses on
+    // the tooth or tissue with, whether or not the device renders it (a mouse renders nothing, a
+    // fading safety layer less).
+    Vec3 rendered_force_N{0.0};
+    Vec3 rendered_torque_Nm{0.0};
     SafetyState safety = SafetyState::Idle;
     StepStatus status = StepStatus::Free;
     bool device_ok = false;    // read() gave a sample
