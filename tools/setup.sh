@@ -10,7 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libhidapi-dev libusb-1.0-0-dev umockdev
   libglfw3-dev libimgui-dev libstb-dev
-  xvfb xauth libgl1-mesa-dri
+  xvfb xauth libgl1-mesa-dri xdotool binutils
 )
 
 # One dpkg-query for all packages; unknown ones simply do not appear as installed.
