@@ -74,8 +74,10 @@ OrbitCamera frame(const std::vector<const ToothSpot*>& teeth, Vec3 from, double 
         hi = glm::max(hi, t->centre);
     }
     cam.target = 0.5 * (lo + hi);
+    // The centres are at the gingival margins: aim a little toward the crowns, which fill the view.
+    cam.target.y += pitch_rad < 0 ? -0.003 : 0.003;
     // A tooth is about 10 mm wide and 20 mm tall: frame the span of the centres plus one tooth.
-    const double span = std::max(glm::length(hi - lo) + 0.012, 0.03);
+    const double span = std::max(glm::length(hi - lo) + 0.012, 0.035);
     cam.distance_m = 0.6 * span / std::tan(0.5 * cam.fov_y_rad);
     from.y = 0.0;
     if (glm::length(from) < 1e-9) from = Vec3(0, 0, 1);
@@ -99,7 +101,7 @@ bool sextant_view(const std::vector<ToothSpot>& teeth, int sextant, bool lingual
     }
     if (in.empty()) return false;
     // Look a little from occlusal: down onto a lower jaw, up into an upper one.
-    out = frame(in, lingual ? -buccal : buccal, upper ? -0.35 : 0.35);
+    out = frame(in, lingual ? -buccal : buccal, upper ? -0.2 : 0.35);
     return true;
 }
 
@@ -114,7 +116,7 @@ OrbitCamera overview(const std::vector<ToothSpot>& teeth) {
     }
     if (all.empty()) return OrbitCamera{};
     // From occlusal of the jaw with more of the teeth: down onto a lower one, up into an upper one.
-    return frame(all, buccal, upper > 0 ? -0.35 : 0.35);
+    return frame(all, buccal, upper > 0 ? -0.2 : 0.35);
 }
 
 }  // namespace sulcus::desktop
