@@ -157,6 +157,17 @@ TEST(App, NoDisplayIsAClearError) {
     EXPECT_NE(r.output.find("no display"), std::string::npos) << r.output;
 }
 
+// With no Phantom answering, the default device is the mouse, and the app says why.
+TEST(App, AutoDeviceFallsBackToTheMouse) {
+    REQUIRE_APP();
+    const Shell r = run("SULCUS_LIBHD=/nonexistent/libHD.so xvfb-run -a -s '-screen 0 1280x800x24' " + kApp +
+                        " --case " + kCases + "/healthy_11 --frames 3 --size 800x600");
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("/nonexistent/libHD.so"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("the mouse drives the probe"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("(Mouse and keyboard)"), std::string::npos) << r.output;
+}
+
 // A lesson session under Xvfb: the mouse device driven by real X pointer events for 60 s of servo
 // time; the app exits cleanly and reports the servo thread's deadline misses.
 TEST(App, MouseSessionOfSixtySecondsUnderXvfb) {
