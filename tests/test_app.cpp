@@ -189,6 +189,8 @@ TEST(App, MouseSessionOfSixtySecondsUnderXvfb) {
     EXPECT_EQ(servo.at("read_failures").get<uint64_t>(), 0u);
     // The pointer moved the probe.
     EXPECT_GT(j.at("haptic_travel_m").get<double>(), 1e-3);
+    // ... into contact with the case, the renderer holding it outside.
+    EXPECT_GT(j.at("contact_ticks").get<uint64_t>(), 100u);
     EXPECT_GT(j.at("frames").get<int>(), 300);
     // The summary line names the deadline misses.
     EXPECT_NE(r.output.find("deadline misses"), std::string::npos) << r.output;

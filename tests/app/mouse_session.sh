@@ -37,14 +37,21 @@ drag() {  # button, dx per step, dy per step, steps
 
 deadline=$((SECONDS + ${seconds%.*} + 90))
 while kill -0 "$app" 2>/dev/null && [ "$SECONDS" -lt "$deadline" ]; do
-  drag 1 0 3 12            # probe down in the view plane
+  # W inserts along the probe's own axis: from its start over a site's line, down the sulcus
+  # to the pocket floor (about 14 mm); S withdraws. Then drags in the view plane, sideways
+  # against the tooth, along the arch, in depth (wheel) and tilted (right-drag).
+  xdotool windowfocus "$wid" 2>/dev/null
+  xdotool key --delay 15 --repeat 160 w 2>/dev/null
+  drag 1 4 0 10
+  drag 1 -4 0 20
+  drag 1 4 0 10
+  xdotool key --delay 15 --repeat 160 s 2>/dev/null
   drag 1 3 0 8             # along the arch
-  xdotool click --repeat 2 5 2>/dev/null   # wheel: deeper into the view
+  xdotool click --repeat 2 4 2>/dev/null   # wheel: into the view
   drag 3 2 0 6             # tilt
   drag 3 -2 0 6            # and back
-  xdotool click --repeat 2 4 2>/dev/null
+  xdotool click --repeat 2 5 2>/dev/null
   drag 1 -3 0 8
-  drag 1 0 -2 12           # up again, a little less than down
   sleep 0.2
 done
 

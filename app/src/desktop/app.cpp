@@ -29,6 +29,9 @@ constexpr double kFrameCapHz = 60.0;  // no faster, so the UI leaves the servo t
 // Bleeding on probing shows within seconds of the probe reaching the pocket floor; charts record
 // it for the whole sextant after about 30 s. The drop shows this long after the site was probed.
 constexpr double kBleedDelay_s = 2.0;
+// How far the mouse's target may lead the drawn probe (m): 0.6 N at 1 N/mm, past the 0.5 N
+// trauma level so the feedback for it can still be seen.
+constexpr double kMouseLead_m = 0.6e-3;
 
 double now_s() {
     using namespace std::chrono;
@@ -185,6 +188,9 @@ int App::run() {
     const bool software = renderer.find("llvmpipe") != std::string::npos || renderer.find("softpipe") != std::string::npos;
     samples_ = options_.msaa >= 0 ? options_.msaa : (software ? 0 : 4);
 
+    // Ours first: ImGui's GLFW backend chains to a callback installed before it.
+    glfwSetWindowUserPointer(window_, this);
+    glfwSetKeyCallback(window_, &App::key_callback);
     IMGUI_CHECKVERSION();
     ImGui::CreateContext();
     ImGui::GetIO().IniFilename = nullptr;  // the same layout at every start (and in screenshots)
@@ -315,6 +321,14 @@ void App::chart_pass(const ServoSnapshot& s) {
     }
 }
 
+void App::key_callback(GLFWwindow* window, int key, int, int action, int mods) {
+    if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
+    // Keys that act once (view, chart, e-stop) take presses only; motion keys repeat.
+    const bool motion = key == GLFW_KEY_W || key == GLFW_KEY_S || key == GLFW_KEY_A || key == GLFW_KEY_D;
+    if (action == GLFW_REPEAT && !motion) return;
+    if (auto* app = static_cast<App*>(glfwGetWindowUserPointer(window))) app->keys_.emplace_back(key, mods);
+}
+
 void App::handle_input() {
     ImGuiIO& io = ImGui::GetIO();
     double x = 0, y = 0;
@@ -359,28 +373,44 @@ void App::handle_input() {
         if (ctrl || !mouse_) camera_.zoom(io.MouseWheel);
         else driver_.wheel(io.MouseWheel, basis, shift);
     }
+    std::vector<std::pair<int, int>> keys;
+    keys.swap(keys_);
     if (!io.WantCaptureKeyboard) {
-        // Dear ImGui 1.86 indexes keys by the backend's codes (GLFW's).
-        auto pressed = [&](int k) { return ImGui::IsKeyPressed(k, true); };
-        if (mouse_) {
-            if (pressed(GLFW_KEY_W)) driver_.key_insert(1.0, ctrl);
-            if (pressed(GLFW_KEY_S)) driver_.key_insert(-1.0, ctrl);
-            if (pressed(GLFW_KEY_A)) driver_.key_rotate(1.0, ctrl);
-            if (pressed(GLFW_KEY_D)) driver_.key_rotate(-1.0, ctrl);
-            if (ImGui::IsKeyPressed(GLFW_KEY_R, false)) driver_.reset(start_pose_);
+        for (const auto& [key, mods] : keys) {
+            const bool fine = (mods & GLFW_MOD_CONTROL) != 0;
+            if (mouse_) {
+                if (key == GLFW_KEY_W) driver_.key_insert(1.0, fine);
+                if (key == GLFW_KEY_S) driver_.key_insert(-1.0, fine);
+                if (key == GLFW_KEY_A) driver_.key_rotate(1.0, fine);
+                if (key == GLFW_KEY_D) driver_.key_rotate(-1.0, fine);
+                if (key == GLFW_KEY_R) driver_.reset(start_pose_);
+            }
+            if (key == GLFW_KEY_SPACE && chart_ && reading_.site_index >= 0) {
+                const SiteFrame& s = manifest_.sites[size_t(reading_.site_index)];
+                chart_->record_depth(s.fdi, s.site, reading_.depth_m);
+                ui_.selected_fdi = s.fdi;
+                ui_.selected_site = int(s.site);
+            }
+            if (key == GLFW_KEY_G) ui_.translucent_gingiva = !ui_.translucent_gingiva;
+            if (key == GLFW_KEY_ESCAPE) loop_.emergency_stop();
+            if (key >= GLFW_KEY_0 && key <= GLFW_KEY_6) set_view(key - GLFW_KEY_0, (mods & GLFW_MOD_SHIFT) != 0);
         }
-        if (ImGui::IsKeyPressed(GLFW_KEY_SPACE, false) && chart_ && reading_.site_index >= 0) {
-            const SiteFrame& s = manifest_.sites[size_t(reading_.site_index)];
-            chart_->record_depth(s.fdi, s.site, reading_.depth_m);
-            ui_.selected_fdi = s.fdi;
-            ui_.selected_site = int(s.site);
-        }
-        if (ImGui::IsKeyPressed(GLFW_KEY_G, false)) ui_.translucent_gingiva = !ui_.translucent_gingiva;
-        if (ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false)) loop_.emergency_stop();
-        for (int k = 0; k <= 6; ++k)
-            if (ImGui::IsKeyPressed(GLFW_KEY_0 + k, false)) set_view(k, shift);
     }
-    if (mouse_) mouse_->set_target(driver_.pose());
+    if (mouse_) {
+        // No force stops a mouse: the target may not lead the drawn probe by more than
+        // kMouseLead_m, so pressing on past the surface asks for at most that much force
+        // (stiffness x lead) and the probe's pose never runs centimetres into the tooth.
+        if (live_.has_snapshot) {
+            const Vec3 lead = driver_.pose().position - live_.snapshot.graphic.position;
+            const double n = glm::length(lead);
+            if (n > kMouseLead_m) {
+                Pose p = driver_.pose();
+                p.position = live_.snapshot.graphic.position + lead * (kMouseLead_m / n);
+                driver_.set_pose(p);
+            }
+        }
+        mouse_->set_target(driver_.pose());
+    }
 }
 
 void App::update_readout() {

@@ -134,6 +134,10 @@ private:
     double time_above_025_s_ = 0.0, time_above_05_s_ = 0.0;
 
     int frames_ = 0;
+    // Key presses and repeats since the last frame (GLFW key, mods), so a tap shorter than a frame
+    // still counts.
+    std::vector<std::pair<int, int>> keys_;
+    static void key_callback(GLFWwindow* window, int key, int scancode, int action, int mods);
     double mouse_x_ = 0.0, mouse_y_ = 0.0;
     bool dragging_[3] = {false, false, false};
 };
