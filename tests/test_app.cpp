@@ -168,6 +168,21 @@ TEST(App, AutoDeviceFallsBackToTheMouse) {
     EXPECT_NE(r.output.find("(Mouse and keyboard)"), std::string::npos) << r.output;
 }
 
+// The simulated hand probes every site of healthy_11 along the case's trajectory and charts each
+// at its pass's hold, whatever the frame rate.
+TEST(App, SimulatedHandChartsEverySite) {
+    REQUIRE_APP();
+    const std::string dir = temp_dir("sim");
+    const Shell r = run("xvfb-run -a -s '-screen 0 1280x800x24' " + kApp + " --case " + kCases +
+                        "/healthy_11 --device sim --ticks 8600 --size 800x600 --report " + dir + "/report.json");
+    ASSERT_EQ(r.status, 0) << r.output;
+    std::ifstream in(dir + "/report.json");
+    ASSERT_TRUE(in);
+    const nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_EQ(j.at("sites_total").get<int>(), 6);
+    EXPECT_EQ(j.at("sites_charted").get<int>(), 6);
+}
+
 // A lesson session under Xvfb: the mouse device driven by real X pointer events for 60 s of servo
 // time; the app exits cleanly and reports the servo thread's deadline misses.
 TEST(App, MouseSessionOfSixtySecondsUnderXvfb) {

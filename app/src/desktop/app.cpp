@@ -85,7 +85,6 @@ std::string App::load_case() {
     if (!manifest.ok()) return manifest.errors.front();
     manifest_ = std::move(manifest.manifest);
     chart_.emplace(manifest_.chart);
-    passes_done_.assign(manifest_.passes.size(), false);
     probed_at_.assign(manifest_.sites.size(), -1.0);
     return "";
 }
@@ -268,7 +267,7 @@ void App::drain_telemetry() {
         history_.push({s.time_s, float(f), float(glm::length(s.rendered_torque_Nm))});
         max_force_N_ = std::max(max_force_N_, f);
         // Time above the thresholds over the whole session, tick by tick.
-        if (const HistorySample* last = history_.latest(); last && history_.size() > 1) {
+        if (history_.size() > 1) {
             const double dt = s.time_s - history_.at(history_.size() - 2).time_s;
             if (f > 0.25) time_above_025_s_ += dt;
             if (f >= 0.5) time_above_05_s_ += dt;
@@ -280,7 +279,7 @@ void App::drain_telemetry() {
         const ProbeReading r = read_probe(manifest_.sites, s.graphic);
         if (r.site_index >= 0 && r.in_sulcus && r.depth_m > 1e-3 && probed_at_[size_t(r.site_index)] < 0)
             probed_at_[size_t(r.site_index)] = s.time_s;
-        if (options_.device == "sim") chart_pass(s);
+        if (options_.device == "sim") chart_pass(s, r);
         if (s.step_us > 0) step_max_window_ = std::max(step_max_window_, double(s.step_us));
         live_.step_us = s.step_us;
     }
@@ -300,25 +299,30 @@ void App::drain_telemetry() {
 
 // The simulated hand charts each pass of its trajectory once it rests on the floor, half way
 // through the hold, from the tick that reaches that time (the frame rate does not matter).
-void App::chart_pass(const ServoSnapshot& s) {
+// The passes come in time order (case.json), so the next one to chart is an index.
+void App::chart_pass(const ServoSnapshot& s, const ProbeReading& r) {
     if (!chart_) return;
-    for (size_t i = 0; i < manifest_.passes.size(); ++i) {
-        const ProbingPass& p = manifest_.passes[i];
-        // The hand's script runs on ticks (one dt each), not on the wall clock.
-        const double t = scene_.scene.trajectory.front().t + double(s.tick) / servo_config_.rate_hz;
-        if (passes_done_[i] || t < p.t_floor + 0.5 * (p.t_end - p.t_floor)) continue;
-        passes_done_[i] = true;
-        const ProbeReading r = read_probe(manifest_.sites, s.graphic);
+    // The hand's script runs on ticks (one dt each), not on the wall clock.
+    const double t = scene_.scene.trajectory.front().t + double(s.tick) / servo_config_.rate_hz;
+    for (; next_pass_ < manifest_.passes.size(); ++next_pass_) {
+        const ProbingPass& p = manifest_.passes[next_pass_];
+        if (t < p.t_floor + 0.5 * (p.t_end - p.t_floor)) return;
         if (r.site_index < 0) continue;
         const SiteFrame& site = manifest_.sites[size_t(r.site_index)];
         if (site.fdi != p.fdi || site.site != p.site) continue;
-        chart_->record_depth(site.fdi, site.site, r.depth_m);
+        chart_reading(r);
         // The hand's trainee also notes bleeding, as the case's chart has it.
         if (const auto& rec = manifest_.chart.teeth.at(site.fdi).sites[size_t(site.site)]; rec && rec->bop)
             chart_->set_bop(site.fdi, site.site, true);
-        ui_.selected_fdi = site.fdi;
-        ui_.selected_site = int(site.site);
     }
+}
+
+// Charts the depth of a reading at its site and selects that site in the chart.
+void App::chart_reading(const ProbeReading& r) {
+    const SiteFrame& site = manifest_.sites[size_t(r.site_index)];
+    chart_->record_depth(site.fdi, site.site, r.depth_m);
+    ui_.selected_fdi = site.fdi;
+    ui_.selected_site = int(site.site);
 }
 
 void App::key_callback(GLFWwindow* window, int key, int, int action, int mods) {
@@ -346,7 +350,6 @@ void App::handle_input() {
                        glfwGetKey(window_, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS;
     const bool ctrl = glfwGetKey(window_, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
                       glfwGetKey(window_, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS;
-    ui_.fine = ctrl;
     int fw = 0, fh = 0;
     glfwGetFramebufferSize(window_, &fw, &fh);
     int ww = 0, wh = 0;
@@ -385,12 +388,7 @@ void App::handle_input() {
                 if (key == GLFW_KEY_D) driver_.key_rotate(-1.0, fine);
                 if (key == GLFW_KEY_R) driver_.reset(start_pose_);
             }
-            if (key == GLFW_KEY_SPACE && chart_ && reading_.site_index >= 0) {
-                const SiteFrame& s = manifest_.sites[size_t(reading_.site_index)];
-                chart_->record_depth(s.fdi, s.site, reading_.depth_m);
-                ui_.selected_fdi = s.fdi;
-                ui_.selected_site = int(s.site);
-            }
+            if (key == GLFW_KEY_SPACE && chart_ && reading_.site_index >= 0) chart_reading(reading_);
             if (key == GLFW_KEY_G) ui_.translucent_gingiva = !ui_.translucent_gingiva;
             if (key == GLFW_KEY_ESCAPE) loop_.emergency_stop();
             if (key >= GLFW_KEY_0 && key <= GLFW_KEY_6) set_view(key - GLFW_KEY_0, (mods & GLFW_MOD_SHIFT) != 0);

@@ -52,7 +52,6 @@ struct UiState {
     int selected_fdi = 0;
     int selected_site = -1;       // index into kAllSites
     double plot_window_s = 5.0;
-    bool fine = false;            // fine mouse motion (Ctrl held)
 };
 
 struct LiveServo {
@@ -77,7 +76,8 @@ private:
     void handle_input();
     void drain_telemetry();
     void update_readout();
-    void chart_pass(const ServoSnapshot& s);
+    void chart_pass(const ServoSnapshot& s, const ProbeReading& r);
+    void chart_reading(const ProbeReading& r);
     void draw_frame();
     void draw_panels();
     void panel_lesson();
@@ -126,7 +126,7 @@ private:
     ProbeReading reading_;
     std::optional<ChartSession> chart_;
     std::vector<double> probed_at_;  // per site: servo time it was first probed (< 0: not yet)
-    std::vector<bool> passes_done_;  // simulated hand: the trajectory's passes already charted
+    size_t next_pass_ = 0;  // simulated hand: the first of the trajectory's passes not yet charted
     std::vector<std::string> feedback_;
     double max_force_N_ = 0.0;
     double haptic_travel_m_ = 0.0;  // furthest the haptic tool went from its start

@@ -133,13 +133,37 @@ std::vector<float> interleave(const TriMesh& mesh) {
 
 }  // namespace
 
+// Uploads a triangle mesh (positions and area-weighted normals) into a vertex array of `m`.
+void SceneView::upload(const TriMesh& mesh, Mesh& m) {
+    const std::vector<float> vertices = interleave(mesh);
+    glGenVertexArrays(1, &m.vao);
+    glBindVertexArray(m.vao);
+    glGenBuffers(1, &m.vbo);
+    glBindBuffer(GL_ARRAY_BUFFER, m.vbo);
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(vertices.size() * sizeof(float)), vertices.data(), GL_STATIC_DRAW);
+    glGenBuffers(1, &m.ebo);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.ebo);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(mesh.triangles.size() * 3 * sizeof(uint32_t)),
+                 mesh.triangles.data(), GL_STATIC_DRAW);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+    glEnableVertexAttribArray(1);
+    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<const void*>(3 * sizeof(float)));
+    glBindVertexArray(0);
+    m.index_count = GLsizei(mesh.triangles.size() * 3);
+}
+
+void SceneView::release(Mesh& m) {
+    if (!m.vao) return;
+    glDeleteBuffers(1, &m.vbo);
+    glDeleteBuffers(1, &m.ebo);
+    glDeleteVertexArrays(1, &m.vao);
+    m.vao = m.vbo = m.ebo = 0;
+}
+
 SceneView::~SceneView() {
-    if (drop_.vao) meshes_.push_back(drop_);
-    for (Mesh& m : meshes_) {
-        glDeleteBuffers(1, &m.vbo);
-        glDeleteBuffers(1, &m.ebo);
-        glDeleteVertexArrays(1, &m.vao);
-    }
+    for (Mesh& m : meshes_) release(m);
+    release(drop_);
     if (program_) glDeleteProgram(program_);
     for (Target& t : targets_) {
         if (!t.fbo) continue;
@@ -195,7 +219,6 @@ std::string SceneView::init(const Asset& asset) {
                 m.roughness = float(mat.roughness);
                 m.metallic = float(mat.metallic);
             }
-            const std::vector<float> vertices = interleave(part.mesh);
             if (kind != ObjectKind::Probe) {
                 for (const Vec3& v : part.mesh.vertices) {
                     const Vec3 w = Vec3(m.model * glm::dvec4(v, 1.0));
@@ -203,22 +226,7 @@ std::string SceneView::init(const Asset& asset) {
                     box_max_ = glm::max(box_max_, w);
                 }
             }
-            glGenVertexArrays(1, &m.vao);
-            glBindVertexArray(m.vao);
-            glGenBuffers(1, &m.vbo);
-            glBindBuffer(GL_ARRAY_BUFFER, m.vbo);
-            glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(vertices.size() * sizeof(float)), vertices.data(), GL_STATIC_DRAW);
-            glGenBuffers(1, &m.ebo);
-            glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.ebo);
-            glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(part.mesh.triangles.size() * 3 * sizeof(uint32_t)),
-                         part.mesh.triangles.data(), GL_STATIC_DRAW);
-            glEnableVertexAttribArray(0);
-            glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
-            glEnableVertexAttribArray(1);
-            glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
-                                  reinterpret_cast<const void*>(3 * sizeof(float)));
-            glBindVertexArray(0);
-            m.index_count = GLsizei(part.mesh.triangles.size() * 3);
+            upload(part.mesh, m);
             meshes_.push_back(m);
         }
     }
@@ -241,22 +249,7 @@ std::string SceneView::init(const Asset& asset) {
                 sphere.triangles.push_back({a, c, b});
                 sphere.triangles.push_back({b, c, d});
             }
-        const std::vector<float> vertices = interleave(sphere);
-        glGenVertexArrays(1, &drop_.vao);
-        glBindVertexArray(drop_.vao);
-        glGenBuffers(1, &drop_.vbo);
-        glBindBuffer(GL_ARRAY_BUFFER, drop_.vbo);
-        glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(vertices.size() * sizeof(float)), vertices.data(), GL_STATIC_DRAW);
-        glGenBuffers(1, &drop_.ebo);
-        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, drop_.ebo);
-        glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(sphere.triangles.size() * 3 * sizeof(uint32_t)),
-                     sphere.triangles.data(), GL_STATIC_DRAW);
-        glEnableVertexAttribArray(0);
-        glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
-        glEnableVertexAttribArray(1);
-        glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<const void*>(3 * sizeof(float)));
-        glBindVertexArray(0);
-        drop_.index_count = GLsizei(sphere.triangles.size() * 3);
+        upload(sphere, drop_);
         drop_.color = {0.45f, 0.01f, 0.02f, 1.0f};
         drop_.roughness = 0.15f;  // wet
     }
@@ -288,9 +281,8 @@ std::string SceneView::init(const Asset& asset) {
     return "";
 }
 
-void SceneView::draw_mesh(const Mesh& m, const glm::dmat4& model, const glm::dmat4& view_proj, const float* color,
-                          float alpha, bool ids, int id_kind, int id_fdi) {
-    (void)view_proj;
+void SceneView::draw_mesh(const Mesh& m, const glm::dmat4& model, const float* color, float alpha, bool ids,
+                          int id_kind, int id_fdi) {
     const glm::mat4 mf(model);
     glUniformMatrix4fv(u_model_, 1, GL_FALSE, glm::value_ptr(mf));
     const glm::mat3 nm(glm::inverseTranspose(glm::dmat3(model)));
@@ -335,14 +327,14 @@ void SceneView::pass(const glm::dmat4& view_proj, const Vec3& eye, const Pose& g
             for (float& c : color) c = std::min(1.0f, c * 1.08f + 0.05f);
         }
         const glm::dmat4 model = m.kind == ObjectKind::Probe ? graphic_m : m.model;
-        draw_mesh(m, model, view_proj, color, 1.0f, ids, int(m.kind), m.kind == ObjectKind::Tooth ? m.fdi : 0);
+        draw_mesh(m, model, color, 1.0f, ids, int(m.kind), m.kind == ObjectKind::Tooth ? m.fdi : 0);
     }
     // The id pass leaves see-through gingiva out: what is seen through it is what counts.
     if (ids) return;
     for (const Vec3& at : o.bleeding) {
         glm::dmat4 m = glm::scale(glm::dmat4(1.0), Vec3(o.drop_radius_m));
         m[3] = glm::dvec4(at, 1.0);
-        draw_mesh(drop_, m, view_proj, drop_.color.data(), 1.0f, false, 0, 0);
+        draw_mesh(drop_, m, drop_.color.data(), 1.0f, false, 0, 0);
     }
 
     // Translucent: the ghost and see-through gingiva, without writing depth, back faces first.
@@ -355,7 +347,7 @@ void SceneView::pass(const glm::dmat4& view_proj, const Vec3& eye, const Pose& g
         for (GLenum face : {GL_FRONT, GL_BACK}) {
             glCullFace(face);
             for (const Mesh& m : meshes_)
-                if (m.kind == ObjectKind::Probe) draw_mesh(m, haptic_m, view_proj, red, 0.35f, false, 0, 0);
+                if (m.kind == ObjectKind::Probe) draw_mesh(m, haptic_m, red, 0.35f, false, 0, 0);
         }
     }
     if (o.show_gingiva && !gingiva_opaque) {
@@ -364,7 +356,7 @@ void SceneView::pass(const glm::dmat4& view_proj, const Vec3& eye, const Pose& g
             glCullFace(face);
             for (const Mesh& m : meshes_)
                 if (m.kind == ObjectKind::Gingiva)
-                    draw_mesh(m, m.model, view_proj, m.color.data(), float(o.gingiva_alpha), false, 0, 0);
+                    draw_mesh(m, m.model, m.color.data(), float(o.gingiva_alpha), false, 0, 0);
         }
     }
     glDisable(GL_CULL_FACE);

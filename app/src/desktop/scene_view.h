@@ -78,8 +78,10 @@ private:
     };
     void pass(const glm::dmat4& view_proj, const Vec3& eye, const Pose& graphic, const Pose& haptic,
               const DrawOptions& options, bool ids);
-    void draw_mesh(const Mesh& m, const glm::dmat4& model, const glm::dmat4& view_proj, const float* color,
-                   float alpha, bool ids, int id_kind, int id_fdi);
+    void draw_mesh(const Mesh& m, const glm::dmat4& model, const float* color, float alpha, bool ids, int id_kind,
+                   int id_fdi);
+    static void upload(const TriMesh& mesh, Mesh& m);
+    static void release(Mesh& m);
 
     GLuint program_ = 0;
     GLint u_view_proj_ = -1, u_model_ = -1, u_normal_ = -1, u_color_ = -1, u_eye_ = -1, u_rough_ = -1,
