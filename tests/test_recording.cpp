@@ -497,5 +497,220 @@ TEST(Recording, MeasureFlushCost) {
     }
 }
 
+// The chunks of a file as (type, first tick), in file order, walking the headers (no checks).
+std::vector<std::pair<int, uint64_t>> chunk_list(const std::vector<uint8_t>& b) {
+    auto u32 = [&](std::size_t at) {
+        return static_cast<uint32_t>(b[at] | (b[at + 1] << 8) | (b[at + 2] << 16) | (static_cast<uint32_t>(b[at + 3]) << 24));
+    };
+    std::vector<std::pair<int, uint64_t>> out;
+    std::size_t off = 16 + u32(12) + 4;
+    while (off + 24 <= b.size()) {
+        uint64_t first = 0;
+        for (int i = 7; i >= 0; --i) first = (first << 8) | b[off + 16 + i];
+        out.emplace_back(b[off + 4], first);
+        off += 24 + u32(off + 8) + 4;
+    }
+    return out;
+}
+
+// Annexes: each is written by the next flush after every tick and event added before it, at the
+// count of ticks added so far, and reads back as stored; the lesson metadata key round-trips.
+TEST(Recording, AnnexesFollowWhatWasAddedBeforeThemAndReadBack) {
+    const std::string path = temp_path("annex.rec");
+    RecordingWriter w;
+    RecordingMetadata meta = test_metadata();
+    meta.lesson = "lessons/probing-basics.json";
+    EXPECT_NE(w.add_annex("score", "{}"), "");  // not open
+    ASSERT_EQ(w.open(path, meta, no_sync()), "");
+    const std::string score = R"({"sites":[{"tooth":36,"site":"MB","pd_mm":5.0}],"grade":"ü"})";
+    for (uint64_t i = 0; i < 250; ++i) {
+        ASSERT_TRUE(w.add_tick(awkward_tick(i)));
+        if (i == 115) {
+            ASSERT_TRUE(w.add_event(i, "chart.depth", R"({"mm":3})"));
+        }
+        if (i == 119) {
+            ASSERT_EQ(w.add_annex("score", score), "");  // 20 ticks and an event still pending
+        }
+        if (i == 129) {
+            ASSERT_EQ(w.flush(), "");
+        }
+        if (i == 199) {
+            ASSERT_EQ(w.flush(), "");
+        }
+    }
+    ASSERT_EQ(w.add_annex("notes/über", ""), "");  // written by close(), after the last 50 ticks
+    ASSERT_NE(w.add_annex("big", std::string(kMaxAnnexBytes, 'x')), "");
+    ASSERT_EQ(w.close(), "");
+    const std::string closed = w.add_annex("late", "{}");
+    EXPECT_NE(closed, "");
+    EXPECT_EQ(closed.find('\n'), std::string::npos);
+    EXPECT_EQ(w.stats().annexes_written, 2u);
+
+    const RecordingRead r = read_recording(path);
+    ASSERT_TRUE(r.ok()) << r.error;
+    EXPECT_FALSE(r.truncation.truncated) << r.truncation.reason;
+    EXPECT_EQ(r.metadata.lesson, "lessons/probing-basics.json");
+    ASSERT_EQ(r.ticks.size(), 250u);
+    ASSERT_EQ(r.events.size(), 1u);
+    ASSERT_EQ(r.annexes.size(), 2u);
+    EXPECT_EQ(r.annexes[0].tick, 120u);
+    EXPECT_EQ(r.annexes[0].name, "score");
+    EXPECT_EQ(r.annexes[0].json, score);
+    EXPECT_EQ(r.annexes[1].tick, 250u);
+    EXPECT_EQ(r.annexes[1].name, "notes/über");
+    EXPECT_EQ(r.annexes[1].json, "");
+
+    // In the file: ticks 0..99, then (flush at 129) ticks 100..129, the event, the annex; then the
+    // rest, the second annex last.
+    const std::vector<std::pair<int, uint64_t>> chunks = chunk_list(read_bytes(path));
+    const std::vector<std::pair<int, uint64_t>> expected = {{1, 0}, {1, 100}, {2, 115}, {3, 120},
+                                                            {1, 130}, {1, 200}, {3, 250}};
+    EXPECT_EQ(chunks, expected);
+
+    // Without a lesson, no "lesson" key.
+    const std::string plain = temp_path("plain.rec");
+    ASSERT_EQ(write_ticks(plain, 3), "");
+    const RecordingRead p = read_recording(plain);
+    EXPECT_EQ(p.metadata.lesson, "");
+    EXPECT_EQ(p.metadata_json.find("lesson"), std::string::npos) << p.metadata_json;
+    EXPECT_TRUE(p.annexes.empty());
+}
+
+// An annex chunk whose lengths run past its payload (with a good CRC) ends the read there, as any
+// malformed chunk does; an annex chunk from a writer that knows nothing of annexes would have been
+// skipped, but this reader knows the type and checks it.
+TEST(Recording, MalformedAnnexChunkIsATruncation) {
+    const std::string path = temp_path("annex_bad_src.rec");
+    ASSERT_EQ(write_ticks(path, 100), "");
+    const std::vector<uint8_t> good = read_bytes(path);
+    auto chunk = [](uint8_t type, const std::vector<uint8_t>& payload, uint32_t records, uint64_t first) {
+        std::vector<uint8_t> c = {'C', 'H', 'N', 'K', type, 0, 0, 0};
+        for (int i = 0; i < 4; ++i) c.push_back(static_cast<uint8_t>(payload.size() >> (8 * i)));
+        for (int i = 0; i < 4; ++i) c.push_back(static_cast<uint8_t>(records >> (8 * i)));
+        for (int i = 0; i < 8; ++i) c.push_back(static_cast<uint8_t>(first >> (8 * i)));
+        c.insert(c.end(), payload.begin(), payload.end());
+        const uint32_t crc = crc32(c.data(), c.size());
+        for (int i = 0; i < 4; ++i) c.push_back(static_cast<uint8_t>(crc >> (8 * i)));
+        return c;
+    };
+    // name length 200 in a 12-byte payload; a name that fits but a text length past the end; a
+    // well-formed annex (control).
+    const std::vector<uint8_t> past_name = {200, 0, 0, 0, 'a', 'b', 'c', 'd', 0, 0, 0, 0};
+    const std::vector<uint8_t> past_text = {1, 0, 0, 0, 'a', 9, 0, 0, 0, '{', '}'};
+    const std::vector<uint8_t> fine = {1, 0, 0, 0, 'a', 2, 0, 0, 0, '{', '}'};
+    const std::string bad = temp_path("annex_bad.rec");
+    const std::vector<std::vector<uint8_t>> payloads = {past_name, past_text, fine};
+    for (std::size_t k = 0; k < payloads.size(); ++k) {
+        const std::vector<uint8_t>& payload = payloads[k];
+        std::vector<uint8_t> b = good;
+        const std::vector<uint8_t> c = chunk(3, payload, 1, 100);
+        b.insert(b.end(), c.begin(), c.end());
+        const std::vector<uint8_t> after = chunk(9, {1, 2, 3}, 1, 100);  // an unknown type: skipped
+        b.insert(b.end(), after.begin(), after.end());
+        write_bytes(bad, b, b.size());
+        const RecordingRead r = read_recording(bad);
+        ASSERT_TRUE(r.ok()) << r.error;
+        EXPECT_EQ(r.ticks.size(), 100u);
+        if (k == 2) {  // well formed
+            EXPECT_FALSE(r.truncation.truncated) << r.truncation.reason;
+            ASSERT_EQ(r.annexes.size(), 1u);
+            EXPECT_EQ(r.annexes[0].name, "a");
+            EXPECT_EQ(r.annexes[0].json, "{}");
+            EXPECT_EQ(r.annexes[0].tick, 100u);
+            continue;
+        }
+        EXPECT_TRUE(r.annexes.empty()) << "payload " << k;
+        ASSERT_TRUE(r.truncation.truncated) << "payload " << k;
+        EXPECT_EQ(r.truncation.offset, good.size());
+        EXPECT_EQ(r.truncation.bytes_dropped, b.size() - good.size());
+        EXPECT_NE(r.truncation.reason.find("annex"), std::string::npos) << r.truncation.reason;
+    }
+}
+
+// read -> write_recording -> read gives the same metadata, ticks (bit for bit), events and
+// annexes; rewriting in place with an edited annex replaces the file whole.
+TEST(Recording, WriteRecordingRewritesTheSameSession) {
+    const std::string src = temp_path("rewrite_src.rec");
+    {
+        RecordingWriter w;
+        RecordingMetadata meta = test_metadata();
+        meta.lesson = "lessons/one.json";
+        meta.rate_hz = 500.0;
+        ASSERT_EQ(w.open(src, meta, no_sync()), "");
+        for (uint64_t i = 0; i < 333; ++i) {
+            ASSERT_TRUE(w.add_tick(awkward_tick(i)));
+            if (i % 37 == 0) {
+                ASSERT_TRUE(w.add_event(i, i % 2 ? "servo.reset" : "chart.depth", "{\"i\":" + std::to_string(i) + "}"));
+            }
+            if (i == 150) {
+                ASSERT_EQ(w.add_annex("score", R"({"n":1})"), "");
+            }
+            if (w.pending_ticks() >= 100) {
+                ASSERT_EQ(w.flush(), "");
+            }
+        }
+        ASSERT_TRUE(w.add_event(400, "after", ""));  // past the last tick
+        ASSERT_EQ(w.add_annex("final", R"({"n":2})"), "");
+        ASSERT_EQ(w.close(), "");
+    }
+    const RecordingRead a = read_recording(src);
+    ASSERT_TRUE(a.ok()) << a.error;
+    ASSERT_EQ(a.ticks.size(), 333u);
+    ASSERT_EQ(a.events.size(), 10u);
+    ASSERT_EQ(a.annexes.size(), 2u);
+
+    const std::string copy = temp_path("rewrite_copy.rec");
+    ASSERT_EQ(write_recording(copy, a), "");
+    const RecordingRead b = read_recording(copy);
+    ASSERT_TRUE(b.ok()) << b.error;
+    EXPECT_FALSE(b.truncation.truncated) << b.truncation.reason;
+    EXPECT_EQ(b.metadata.case_path, a.metadata.case_path);
+    EXPECT_EQ(b.metadata.lesson, "lessons/one.json");
+    EXPECT_EQ(b.metadata.device, a.metadata.device);
+    EXPECT_EQ(b.metadata.rate_hz, 500.0);
+    EXPECT_EQ(b.metadata.start_time, "2026-01-02T03:04:05Z");
+    ASSERT_EQ(b.ticks.size(), a.ticks.size());
+    for (std::size_t i = 0; i < a.ticks.size(); ++i) ASSERT_TRUE(same_bits(b.ticks[i], a.ticks[i])) << "tick " << i;
+    ASSERT_EQ(b.events.size(), a.events.size());
+    for (std::size_t i = 0; i < a.events.size(); ++i) {
+        EXPECT_EQ(b.events[i].tick, a.events[i].tick);
+        EXPECT_EQ(b.events[i].kind, a.events[i].kind);
+        EXPECT_EQ(b.events[i].json, a.events[i].json);
+    }
+    ASSERT_EQ(b.annexes.size(), 2u);
+    for (std::size_t i = 0; i < 2; ++i) {
+        EXPECT_EQ(b.annexes[i].tick, a.annexes[i].tick);
+        EXPECT_EQ(b.annexes[i].name, a.annexes[i].name);
+        EXPECT_EQ(b.annexes[i].json, a.annexes[i].json);
+    }
+    EXPECT_EQ(b.annexes[0].tick, 151u);
+    // Annexes last in the file.
+    const auto chunks = chunk_list(read_bytes(copy));
+    ASSERT_GE(chunks.size(), 2u);
+    EXPECT_EQ(chunks[chunks.size() - 1].first, 3);
+    EXPECT_EQ(chunks[chunks.size() - 2].first, 3);
+    for (std::size_t i = 0; i + 2 < chunks.size(); ++i) EXPECT_NE(chunks[i].first, 3) << "chunk " << i;
+
+    // Edit a stored annex in place.
+    RecordingRead edited = b;
+    edited.annexes[0].json = R"({"n":1,"reviewed":true})";
+    ASSERT_EQ(write_recording(copy, edited, SyncPolicy::DataSync), "");
+    const RecordingRead c = read_recording(copy);
+    ASSERT_TRUE(c.ok()) << c.error;
+    ASSERT_EQ(c.annexes.size(), 2u);
+    EXPECT_EQ(c.annexes[0].json, R"({"n":1,"reviewed":true})");
+    EXPECT_EQ(c.ticks.size(), 333u);
+    // No temporary file is left beside it.
+    std::size_t files = 0;
+    for (const auto& entry : fs::directory_iterator(fs::path(copy).parent_path()))
+        if (entry.path().filename().string().rfind("rewrite_copy.rec", 0) == 0) ++files;
+    EXPECT_EQ(files, 1u);
+    // A folder that does not exist: an error naming the file, nothing renamed.
+    const std::string nowhere = temp_path("no_such_dir/x.rec");
+    const std::string err = write_recording(nowhere, a);
+    EXPECT_NE(err, "");
+    EXPECT_NE(err.find("x.rec"), std::string::npos) << err;
+}
+
 }  // namespace
 }  // namespace sulcus

@@ -541,5 +541,272 @@ TEST(ServoTelemetry, NoAllocationInTicksWithTelemetry) {
     EXPECT_GT(loop.stats().status_counts[static_cast<int>(StepStatus::Contact)], 0u);
 }
 
+// events_taken counts the UI and lesson events the loop took, this tick's included: its change
+// from one queued snapshot to the next is the number recorded at that tick. A workspace change is
+// a command but not an event, and does not count.
+TEST(ServoTelemetry, EventsTakenCountsPostedEventsAtTheirTick) {
+    const std::unique_ptr<Model> model = press_model();
+    ASSERT_TRUE(model);
+    ServoConfig config;
+    config.duration_s = 0.5;
+    config.telemetry_queue = 4096;
+    HandParameters hp;
+    hp.dt_s = 1e-3;
+    SimulatedHand hand(press_script(), hp);
+    const std::string path = (std::filesystem::temp_directory_path() /
+                              ("test_servo_events_taken_" + std::to_string(::getpid()) + ".rec"))
+                                 .string();
+    RecordingWriter recorder;
+    RecordingOptions ropts;
+    ropts.sync = SyncPolicy::None;
+    ASSERT_EQ(recorder.open(path, RecordingMetadata{}, ropts), "");
+    ASSERT_EQ(recorder.start_writer_thread(0.02), "");
+    ServoLoop loop;
+    ASSERT_EQ(loop.start(config, hand, *model, &recorder), "");
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    EXPECT_EQ(loop.post_event("chart.depth", R"({"mm":2})"), "");
+    EXPECT_EQ(loop.post_event("chart.depth", R"({"mm":3})"), "");
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    EXPECT_EQ(loop.set_workspace(WorkspaceMap{Vec3(0.0), 1.0}), "");
+    EXPECT_EQ(loop.post_event("lesson_step", R"({"step":2})"), "");
+    loop.wait();
+    ASSERT_EQ(recorder.close(), "");
+    const ServoStats st = loop.stats();
+    EXPECT_EQ(st.commands, 4u);
+    EXPECT_EQ(st.events_taken, 3u);
+
+    const RecordingRead rec = read_recording(path);
+    ASSERT_TRUE(rec.ok()) << rec.error;
+    std::vector<uint64_t> recorded_at(st.ticks, 0);  // UI/lesson events recorded per tick
+    for (const RecordingEvent& e : rec.events)
+        if (!is_servo_event(e.kind)) ++recorded_at[e.tick];
+    ServoSnapshot s;
+    uint64_t prev = 0, n = 0;
+    while (loop.pop_telemetry(s)) {
+        ASSERT_EQ(s.tick, n) << "telemetry dropped a tick";
+        ASSERT_EQ(s.events_taken - prev, recorded_at[s.tick]) << "tick " << s.tick;
+        prev = s.events_taken;
+        ++n;
+    }
+    EXPECT_EQ(n, st.ticks);
+    EXPECT_EQ(prev, 3u);
+    ServoSnapshot last;
+    ASSERT_TRUE(loop.latest(last));
+    EXPECT_EQ(last.events_taken, 3u);
+    std::filesystem::remove(path);
+}
+
+// A manual-clock run of `ticks` ticks of the press with a recorder flushed every 100 ticks from
+// this thread; returns the recording read back.
+RecordingRead manual_press(const Model& model, int ticks, const std::string& path) {
+    ServoConfig config;
+    config.manual_clock = true;
+    config.safety.limits.max_force_N = 1.0;
+    HandParameters hp;
+    hp.dt_s = 1e-3;
+    SimulatedHand hand(press_script(), hp);
+    RecordingWriter recorder;
+    RecordingOptions ropts;
+    ropts.sync = SyncPolicy::None;
+    EXPECT_EQ(recorder.open(path, RecordingMetadata{}, ropts), "");
+    ServoLoop loop;
+    EXPECT_EQ(loop.start(config, hand, model, &recorder), "");
+    for (int i = 0; i < ticks; ++i) {
+        if (i == 300) {
+            EXPECT_EQ(loop.post_event("chart.depth", R"({"mm":1.5})"), "");
+        }
+        EXPECT_TRUE(loop.step_manual());
+        if (recorder.pending_ticks() >= 100) {
+            EXPECT_EQ(recorder.flush(), "");
+        }
+    }
+    loop.stop();
+    EXPECT_EQ(recorder.close(), "");
+    return read_recording(path);
+}
+
+// The manual clock: no thread, every tick on this thread at time tick / rate with dt 1 / rate, no
+// deadline missed, no sleeping; the same tick body as the threaded loop (recording, trace,
+// telemetry, latest(), statistics), period statistics left zero; stop() ends it.
+TEST(ServoManualClock, TicksOnTheCallersClockWithNoMisses) {
+    const std::unique_ptr<Model> model = press_model();
+    ASSERT_TRUE(model);
+    ServoConfig config;
+    config.manual_clock = true;
+    config.safety.limits.max_force_N = 1.0;
+    config.trace_ticks = 1000;
+    config.telemetry_queue = 64;
+    HandParameters hp;
+    hp.dt_s = 1e-3;
+    SimulatedHand hand(press_script(), hp);
+
+    ServoLoop loop;
+    EXPECT_FALSE(loop.step_manual());  // not started
+    ASSERT_EQ(loop.start(config, hand, *model), "");
+    EXPECT_TRUE(loop.running());
+    EXPECT_TRUE(loop.manual());
+    EXPECT_FALSE(loop.realtime());
+    ServoSnapshot s;
+    EXPECT_FALSE(loop.latest(s));  // prepared, no tick yet
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<ServoSnapshot> got;
+    for (int i = 0; i < 800; ++i) {
+        ASSERT_TRUE(loop.step_manual()) << "tick " << i;
+        ASSERT_TRUE(loop.latest(s));
+        ASSERT_EQ(s.tick, static_cast<uint64_t>(i));
+        while (loop.pop_telemetry(s)) got.push_back(s);
+    }
+    const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    loop.stop();
+    EXPECT_FALSE(loop.running());
+    EXPECT_FALSE(loop.step_manual());  // after stop()
+    loop.stop();                       // twice is harmless
+
+    const ServoStats st = loop.stats();
+    EXPECT_EQ(st.ticks, 800u);
+    EXPECT_EQ(st.deadline_misses, 0u);
+    EXPECT_EQ(st.skipped_slots, 0u);
+    EXPECT_EQ(st.elapsed_s, 0.0);
+    EXPECT_EQ(st.period_us.max, 0.0);
+    EXPECT_EQ(st.jitter_us.max, 0.0);
+    EXPECT_GT(st.step_us.max, 0.0);  // the step's own wall time is still measured
+    EXPECT_GT(st.status_counts[static_cast<int>(StepStatus::Contact)], 0u);
+    EXPECT_FALSE(st.non_finite_sent);
+    ASSERT_EQ(loop.trace_size(), 800u);
+    ASSERT_EQ(got.size(), 800u);
+    for (std::size_t i = 0; i < 800; ++i) {
+        const TickSample& t = loop.trace()[i];
+        ASSERT_EQ(t.tick, i);
+        ASSERT_EQ(t.time_s, static_cast<double>(i) / 1000.0) << "tick " << i;
+        ASSERT_EQ(t.dt_s, 1.0 / 1000.0) << "tick " << i;
+        ASSERT_FALSE(t.deadline_missed) << "tick " << i;
+        ASSERT_EQ(got[i].time_s, t.time_s);
+        ASSERT_EQ(got[i].deadline_misses, 0u);
+        ASSERT_EQ(std::memcmp(&got[i].force_N, &t.force_N, sizeof(Vec3)), 0) << "tick " << i;
+    }
+    // Faster than the real clock would allow: nothing sleeps (0.8 s of session).
+    std::printf("800 manual ticks in %.3f s of wall time\n", wall_s);
+    EXPECT_LT(wall_s, 0.8);
+
+    // A threaded loop does not step by hand; a manual one with a duration ends by itself.
+    ServoConfig timed = config;
+    timed.duration_s = 0.1;
+    SimulatedHand hand2(press_script(), hp);
+    ServoLoop short_loop;
+    ASSERT_EQ(short_loop.start(timed, hand2, *model), "");
+    int n = 0;
+    while (short_loop.step_manual()) ++n;
+    EXPECT_EQ(n, 100);
+    EXPECT_FALSE(short_loop.running());
+    short_loop.wait();
+    EXPECT_EQ(short_loop.stats().ticks, 100u);
+    ServoConfig threaded = config;
+    threaded.manual_clock = false;
+    threaded.duration_s = 0.02;
+    SimulatedHand hand3(press_script(), hp);
+    ServoLoop live;
+    ASSERT_EQ(live.start(threaded, hand3, *model), "");
+    EXPECT_FALSE(live.step_manual());
+    live.wait();
+}
+
+// Two manual runs of the same script record the same ticks: every field bit for bit but the step's
+// wall time (a measurement of this machine, not an outcome).
+TEST(ServoManualClock, TwoRunsRecordIdenticalTicks) {
+    const std::unique_ptr<Model> model = press_model();
+    ASSERT_TRUE(model);
+    const std::string base = (std::filesystem::temp_directory_path() /
+                              ("test_servo_manual_" + std::to_string(::getpid()))).string();
+    const RecordingRead a = manual_press(*model, 1000, base + "_a.rec");
+    const RecordingRead b = manual_press(*model, 1000, base + "_b.rec");
+    ASSERT_TRUE(a.ok() && b.ok()) << a.error << b.error;
+    ASSERT_EQ(a.ticks.size(), 1000u);
+    ASSERT_EQ(b.ticks.size(), 1000u);
+    int contact = 0;
+    for (std::size_t i = 0; i < a.ticks.size(); ++i) {
+        TickSample x = a.ticks[i], y = b.ticks[i];
+        x.step_us = y.step_us = 0.0f;
+        // Compare the fields as stored (no padding compared).
+        const double dx[] = {x.time_s, x.dt_s, x.device_pose.position.x, x.device_pose.position.y,
+                             x.device_pose.position.z, x.device_pose.orientation.w, x.device_pose.orientation.x,
+                             x.device_pose.orientation.y, x.device_pose.orientation.z, x.force_N.x, x.force_N.y,
+                             x.force_N.z, x.torque_Nm.x, x.torque_Nm.y, x.torque_Nm.z};
+        const double dy[] = {y.time_s, y.dt_s, y.device_pose.position.x, y.device_pose.position.y,
+                             y.device_pose.position.z, y.device_pose.orientation.w, y.device_pose.orientation.x,
+                             y.device_pose.orientation.y, y.device_pose.orientation.z, y.force_N.x, y.force_N.y,
+                             y.force_N.z, y.torque_Nm.x, y.torque_Nm.y, y.torque_Nm.z};
+        ASSERT_EQ(std::memcmp(dx, dy, sizeof dx), 0) << "tick " << i;
+        ASSERT_EQ(x.tick, y.tick);
+        ASSERT_EQ(x.buttons, y.buttons);
+        ASSERT_EQ(x.status, y.status) << "tick " << i;
+        ASSERT_EQ(x.safety_state, y.safety_state) << "tick " << i;
+        ASSERT_EQ(x.device_read, y.device_read);
+        ASSERT_EQ(x.connected, y.connected);
+        ASSERT_EQ(x.deadline_missed, y.deadline_missed);
+        ASSERT_EQ(x.device_fault, y.device_fault);
+        if (x.status == StepStatus::Contact) ++contact;
+    }
+    EXPECT_GT(contact, 100);
+    ASSERT_EQ(a.events.size(), b.events.size());
+    for (std::size_t i = 0; i < a.events.size(); ++i) {
+        EXPECT_EQ(a.events[i].tick, b.events[i].tick);
+        EXPECT_EQ(a.events[i].kind, b.events[i].kind);
+        EXPECT_EQ(a.events[i].json, b.events[i].json);
+    }
+    std::filesystem::remove(base + "_a.rec");
+    std::filesystem::remove(base + "_b.rec");
+}
+
+// An event posted between two step_manual() calls is taken, and recorded, at the next tick.
+TEST(ServoManualClock, EventPostedBetweenStepsIsRecordedAtTheNextTick) {
+    const std::unique_ptr<Model> model = press_model();
+    ASSERT_TRUE(model);
+    ServoConfig config;
+    config.manual_clock = true;
+    HandParameters hp;
+    hp.dt_s = 1e-3;
+    SimulatedHand hand(press_script(), hp);
+    const std::string path = (std::filesystem::temp_directory_path() /
+                              ("test_servo_manual_event_" + std::to_string(::getpid()) + ".rec"))
+                                 .string();
+    RecordingWriter recorder;
+    RecordingOptions ropts;
+    ropts.sync = SyncPolicy::None;
+    ASSERT_EQ(recorder.open(path, RecordingMetadata{}, ropts), "");
+    ServoLoop loop;
+    ASSERT_EQ(loop.start(config, hand, *model, &recorder), "");
+    ServoSnapshot s;
+    for (int i = 0; i < 10; ++i) ASSERT_TRUE(loop.step_manual());
+    ASSERT_TRUE(loop.latest(s));
+    EXPECT_EQ(s.tick, 9u);
+    EXPECT_EQ(s.events_taken, 0u);
+    ASSERT_EQ(loop.post_event("chart.depth", R"({"mm":4})"), "");
+    ASSERT_EQ(loop.post_event("lesson_step", R"({"step":3})"), "");
+    ASSERT_TRUE(loop.step_manual());
+    ASSERT_TRUE(loop.latest(s));
+    EXPECT_EQ(s.tick, 10u);
+    EXPECT_EQ(s.events_taken, 2u);
+    loop.emergency_stop();
+    ASSERT_TRUE(loop.step_manual());
+    ASSERT_TRUE(loop.latest(s));
+    EXPECT_EQ(s.safety, SafetyState::EStopped);
+    EXPECT_EQ(s.events_taken, 2u);  // a servo command is not a UI event
+    loop.stop();
+    ASSERT_EQ(recorder.close(), "");
+    const RecordingRead rec = read_recording(path);
+    ASSERT_TRUE(rec.ok()) << rec.error;
+    ASSERT_EQ(rec.ticks.size(), 12u);
+    ASSERT_EQ(rec.events.size(), 4u);
+    EXPECT_EQ(rec.events[0].kind, "servo.begin");
+    EXPECT_EQ(rec.events[0].tick, 0u);
+    EXPECT_EQ(rec.events[1].kind, "chart.depth");
+    EXPECT_EQ(rec.events[1].tick, 10u);
+    EXPECT_EQ(rec.events[2].kind, "lesson_step");
+    EXPECT_EQ(rec.events[2].tick, 10u);
+    EXPECT_EQ(rec.events[3].kind, "servo.estop");
+    EXPECT_EQ(rec.events[3].tick, 11u);
+    std::filesystem::remove(path);
+}
+
 }  // namespace
 }  // namespace sulcus

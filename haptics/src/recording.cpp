@@ -32,6 +32,7 @@ constexpr std::size_t kCrcBytes = 4;
 constexpr std::size_t kEventHeaderBytes = 16;
 constexpr uint8_t kChunkTicks = 1;
 constexpr uint8_t kChunkEvents = 2;
+constexpr uint8_t kChunkAnnex = 3;
 constexpr uint32_t kMaxMetadataBytes = 1u << 20;
 constexpr uint32_t kMaxPayloadBytes = 64u << 20;  // larger claims are corrupt headers
 
@@ -223,6 +224,7 @@ struct RecordingWriter::Impl {
     std::mutex consumer;
     std::vector<uint8_t> tick_chunk;   // header + ticks_per_chunk records + CRC
     std::vector<uint8_t> event_chunk;  // header + a whole event ring + CRC
+    std::vector<RecordingAnnex> annexes;  // queued by add_annex, written by the next flush
     RecordingStats stats;
     std::string first_error;
     bool failed = false;
@@ -275,6 +277,7 @@ std::string RecordingWriter::open(const std::string& path, const RecordingMetada
         {"rate_hz", metadata.rate_hz},
         {"start_time", metadata.start_time.empty() ? utc_now_iso8601() : metadata.start_time},
     };
+    if (!metadata.lesson.empty()) meta["lesson"] = metadata.lesson;
     const std::string text = meta.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
     if (text.size() > kMaxMetadataBytes) return path + ": metadata longer than 1 MiB";
 
@@ -429,6 +432,30 @@ std::string RecordingWriter::flush() {
         }
     }
 
+    // Annexes: after every tick and event added before them (those were drained above). One chunk
+    // each, built here: they are rare and may be large.
+    for (const RecordingAnnex& a : m->annexes) {
+        if (m->failed) break;
+        const std::size_t payload_bytes = 8 + a.name.size() + a.json.size();
+        std::vector<uint8_t> chunk(kChunkHeaderBytes + payload_bytes + kCrcBytes);
+        uint8_t* p = chunk.data() + kChunkHeaderBytes;
+        put_u32(p, static_cast<uint32_t>(a.name.size()));
+        std::memcpy(p + 4, a.name.data(), a.name.size());
+        put_u32(p + 4 + a.name.size(), static_cast<uint32_t>(a.json.size()));
+        std::memcpy(p + 8 + a.name.size(), a.json.data(), a.json.size());
+        const std::size_t bytes = seal_chunk(chunk.data(), kChunkAnnex, static_cast<uint32_t>(payload_bytes), 1, a.tick);
+        if (!write_all(fd_, chunk.data(), bytes, err)) {
+            m->failed = true;
+            m->first_error = m->path + ": write: " + errno_text(err);
+            break;
+        }
+        wrote = true;
+        m->stats.annexes_written += 1;
+        m->stats.chunks_written += 1;
+        m->stats.bytes_written += bytes;
+    }
+    m->annexes.clear();
+
     if (wrote && !m->failed && m->options.sync == SyncPolicy::DataSync && ::fdatasync(fd_) != 0) {
         m->failed = true;
         m->first_error = m->path + ": fdatasync: " + errno_text(errno);
@@ -439,6 +466,28 @@ std::string RecordingWriter::flush() {
         m->stats.max_flush_us = std::max(m->stats.max_flush_us, m->stats.last_flush_us);
     }
     return m->first_error;
+}
+
+std::string RecordingWriter::add_annex(std::string_view name, std::string_view json) {
+    Impl* m = impl_.get();
+    if (m == nullptr) return "recording: add_annex before open";
+    if (name.size() + json.size() > kMaxAnnexBytes)
+        return m->path + ": annex \"" + textio::one_line(std::string(name.substr(0, 64))) + "\" is larger than " +
+               std::to_string(kMaxAnnexBytes >> 20) + " MiB";
+    // Every tick added before this call is in the ring by now (the caller saw it added).
+    return queue_annex(m->tick_head.load(std::memory_order_acquire), name, json);
+}
+
+std::string RecordingWriter::queue_annex(uint64_t tick, std::string_view name, std::string_view json) {
+    Impl* m = impl_.get();
+    if (m == nullptr) return "recording: add_annex before open";
+    if (name.size() + json.size() > kMaxAnnexBytes)
+        return m->path + ": annex \"" + textio::one_line(std::string(name.substr(0, 64))) + "\" is larger than " +
+               std::to_string(kMaxAnnexBytes >> 20) + " MiB";
+    std::lock_guard<std::mutex> lock(m->consumer);
+    if (!m->accepting.load(std::memory_order_acquire)) return m->path + ": add_annex after close";
+    m->annexes.push_back({tick, std::string(name), std::string(json)});
+    return "";
 }
 
 std::string RecordingWriter::start_writer_thread(double period_s) {
@@ -529,6 +578,17 @@ std::string decode_chunk(uint8_t type, const uint8_t* payload, uint32_t bytes, u
         if (used != bytes) return "event chunk has " + std::to_string(bytes - used) + " bytes after its records";
         return "";
     }
+    if (type == kChunkAnnex) {
+        if (records != 1) return "annex chunk holds " + std::to_string(records) + " records, not 1";
+        if (bytes < 4) return "annex runs past the chunk";
+        const uint64_t name = get_u32(payload);
+        if (bytes - 4 < name + 4) return "annex runs past the chunk";
+        const uint64_t json = get_u32(payload + 4 + name);
+        if (bytes - 8 - name != json) return "annex length does not match its chunk";
+        const char* text = reinterpret_cast<const char*>(payload);
+        out.annexes.push_back({first_tick, std::string(text + 4, name), std::string(text + 8 + name, json)});
+        return "";
+    }
     return "";  // a chunk type this reader does not know: skipped (later minor additions)
 }
 
@@ -591,6 +651,7 @@ RecordingRead read_recording(const std::string& path) {
         return meta.contains(key) && meta[key].is_string() ? meta[key].get<std::string>() : std::string();
     };
     out.metadata.case_path = text_of("case");
+    out.metadata.lesson = text_of("lesson");
     out.metadata.device = text_of("device");
     out.metadata.start_time = text_of("start_time");
     if (meta.contains("rate_hz") && meta["rate_hz"].is_number()) out.metadata.rate_hz = meta["rate_hz"].get<double>();
@@ -635,17 +696,73 @@ RecordingRead read_recording(const std::string& path) {
             stop("chunk CRC mismatch", claimed);
             break;
         }
-        const std::size_t ticks_before = out.ticks.size(), events_before = out.events.size();
+        const std::size_t ticks_before = out.ticks.size(), events_before = out.events.size(),
+                          annexes_before = out.annexes.size();
         const std::string bad = decode_chunk(type, c + kChunkHeaderBytes, payload, records, first_tick, out);
         if (!bad.empty()) {
             out.ticks.resize(ticks_before);
             out.events.resize(events_before);
+            out.annexes.resize(annexes_before);
             stop(bad, claimed);
             break;
         }
         off += whole;
     }
     return out;
+}
+
+std::string write_recording(const std::string& path, const RecordingRead& recording, SyncPolicy sync) {
+    const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
+    std::size_t max_event = 1;
+    for (const RecordingEvent& e : recording.events) max_event = std::max(max_event, e.kind.size() + e.json.size());
+    if (max_event > (1u << 20)) return path + ": an event is longer than 1 MiB";
+    RecordingOptions options;
+    options.sync = sync;
+    options.max_event_bytes = static_cast<uint32_t>(max_event);
+    options.event_ring = 64;  // a power of two: the ring holds exactly this many
+    while (options.event_ring > 2 && options.event_ring * (kEventHeaderBytes + max_event) > kMaxPayloadBytes)
+        options.event_ring /= 2;
+
+    RecordingWriter w;
+    auto fail = [&](const std::string& err) {
+        (void)w.close();
+        std::error_code ec;
+        std::filesystem::remove(tmp, ec);
+        return err;
+    };
+    if (std::string err = w.open(tmp, recording.metadata, options); !err.empty()) return fail(err);
+
+    // Events go in file order, each before the first tick after its own, as the loop writes them.
+    std::size_t next_event = 0;
+    uint32_t pending_events = 0;
+    auto put_event = [&]() -> std::string {
+        if (pending_events == options.event_ring) {
+            if (std::string err = w.flush(); !err.empty()) return err;
+            pending_events = 0;
+        }
+        const RecordingEvent& e = recording.events[next_event++];
+        if (!w.add_event(e.tick, e.kind, e.json)) return tmp + ": event refused by the writer";
+        ++pending_events;
+        return "";
+    };
+    for (const TickSample& t : recording.ticks) {
+        while (next_event < recording.events.size() && recording.events[next_event].tick <= t.tick)
+            if (std::string err = put_event(); !err.empty()) return fail(err);
+        if (!w.add_tick(t)) return fail(tmp + ": tick refused by the writer");
+        if (w.pending_ticks() >= kMaxTicksPerChunk) {
+            if (std::string err = w.flush(); !err.empty()) return fail(err);
+            pending_events = 0;
+        }
+    }
+    while (next_event < recording.events.size())
+        if (std::string err = put_event(); !err.empty()) return fail(err);
+    if (std::string err = w.flush(); !err.empty()) return fail(err);
+    for (const RecordingAnnex& a : recording.annexes)
+        if (std::string err = w.queue_annex(a.tick, a.name, a.json); !err.empty()) return fail(err);
+    if (std::string err = w.close(); !err.empty()) return fail(err);
+    if (std::rename(tmp.c_str(), path.c_str()) != 0) return fail(path + ": cannot rename " + tmp + ": " + errno_text(errno));
+    if (sync == SyncPolicy::DataSync) sync_parent_dir(path);
+    return "";
 }
 
 }  // namespace sulcus

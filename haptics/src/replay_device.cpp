@@ -71,6 +71,11 @@ void ReplayDevice::write(const Vec3& force_N, const Vec3& torque_Nm) noexcept {
 void ReplayDevice::stop() { running_ = false; }
 
 ReplayResult replay_recording(const RecordingRead& recording, const Model& model, const SafetyConfig& safety_config) {
+    return replay_recording(recording, model, safety_config, ReplayObserver{});
+}
+
+ReplayResult replay_recording(const RecordingRead& recording, const Model& model, const SafetyConfig& safety_config,
+                              const ReplayObserver& observer) {
     ReplayResult r;
     const double rate_hz = recording.metadata.rate_hz;
     if (!(rate_hz > 0.0) || !std::isfinite(rate_hz) || rate_hz > 100000.0) {
@@ -93,10 +98,14 @@ ReplayResult replay_recording(const RecordingRead& recording, const Model& model
     // The servo commands as recorded: the starting map and safety settings, then each command
     // before its tick's work.
     std::vector<const RecordingEvent*> commands;
+    std::vector<const RecordingEvent*> ui_events;  // for the observer
     WorkspaceMap start_map;
     bool begun = false;
     for (const RecordingEvent& e : recording.events) {
-        if (!is_servo_event(e.kind)) continue;
+        if (!is_servo_event(e.kind)) {
+            ui_events.push_back(&e);
+            continue;
+        }
         if (e.kind == kEventServoBegin && !begun) {
             bool has_safety = false;
             SafetyConfig recorded;
@@ -117,6 +126,8 @@ ReplayResult replay_recording(const RecordingRead& recording, const Model& model
     ServoTick work;
     work.begin(dev, model, start_map);
     std::size_t next = 0;
+    std::size_t next_ui = 0;
+    uint64_t misses = 0;
     const std::vector<TickSample>& rec = dev.recorded();
     for (std::size_t tick = 0; tick < n; ++tick) {
         for (; next < commands.size() && commands[next]->tick <= rec[tick].tick; ++next) {
@@ -134,11 +145,24 @@ ReplayResult replay_recording(const RecordingRead& recording, const Model& model
                 work.set_workspace(m);
             }
         }
+        // The UI and lesson events the loop took at this tick, before its work, as live.
+        for (; next_ui < ui_events.size() && ui_events[next_ui]->tick <= rec[tick].tick; ++next_ui)
+            if (observer.on_event) observer.on_event(*ui_events[next_ui]);
         const double tick_dt_s = rec[tick].dt_s > 0.0 ? rec[tick].dt_s : dt_s;
         const ServoTick::Out out = work.run(dev, model, safety, rec[tick].deadline_missed, tick_dt_s);
         r.status[tick] = work.result().status;
         r.safety[tick] = out.sent.state;
+        if (rec[tick].deadline_missed) ++misses;
+        if (observer.on_tick) {
+            ServoSnapshot snap = make_snapshot(work, out, rec[tick].tick, rec[tick].time_s);
+            snap.step_us = rec[tick].step_us;  // the live step's wall time, not this one's
+            snap.deadline_misses = misses;
+            snap.events_taken = next_ui;
+            observer.on_tick(snap);
+        }
     }
+    for (; next_ui < ui_events.size(); ++next_ui)  // past the last tick
+        if (observer.on_event) observer.on_event(*ui_events[next_ui]);
     dev.stop();
 
     r.force_N = dev.forces_written();

@@ -51,7 +51,7 @@ ServoLoop::~ServoLoop() { stop(); }
 
 std::string ServoLoop::start(const ServoConfig& config, Device& device, const Model& model,
                              RecordingWriter* recorder) {
-    if (thread_.joinable()) return "servo: the loop is already running";
+    if (thread_.joinable() || manual_active_) return "servo: the loop is already running";
     if (!(config.rate_hz > 0.0) || !std::isfinite(config.rate_hz) || config.rate_hz > 100000.0)
         return "servo: rate_hz must be in (0, 100000]";
     if (!valid_workspace(config.workspace)) return "servo: workspace offset must be finite and scale in [0.001, 1000]";
@@ -98,6 +98,16 @@ std::string ServoLoop::start(const ServoConfig& config, Device& device, const Mo
     stop_request_.store(false);
     ready_.store(false);
     running_.store(true, std::memory_order_release);
+
+    if (config_.manual_clock) {
+        // No thread: the caller ticks. The same preparation as the servo thread's, here.
+        realtime_message_ = "manual clock: no servo thread";
+        prepare();
+        manual_tick_ = 0;
+        manual_active_ = true;
+        ready_.store(true, std::memory_order_release);
+        return "";
+    }
 
     // The thread sets its own priority and warms up, then waits for the go from here, so the
     // priority message is readable once start() returns.
@@ -160,16 +170,7 @@ void ServoLoop::run() noexcept {
         realtime_message_ = "SCHED_FIFO not requested";
     }
 
-    Device& dev = *device_;
-    const Model& model = *model_;
-    SafetyLayer& safety = *safety_;
-
-    ServoTick work;
-    work.begin(dev, model, config_.workspace, config_.anchor ? &config_.anchor_position_m : nullptr);
-    if (config_.anchor) begin_text_ = format_servo_begin(work.workspace(), config_.safety);  // the anchored map
-    record_event(0, kEventServoBegin, begin_text_);
-    char map_text[160];
-
+    prepare();
     ready_.store(true, std::memory_order_release);
 
     const int64_t period_ns = static_cast<int64_t>(std::llround(1e9 / config_.rate_hz));
@@ -205,91 +206,10 @@ void ServoLoop::run() noexcept {
         prev_wake = wake;
         last_wake_ns_ = wake;
 
-        // Requests from other threads, applied (and recorded) before this tick's work.
-        if (estop_request_.exchange(false, std::memory_order_acq_rel)) {
-            safety.emergency_stop();
-            record_event(tick, kEventServoEStop, "{}");
-        }
-        if (reset_request_.exchange(false, std::memory_order_acq_rel)) {
-            safety.reset();
-            record_event(tick, kEventServoReset, "{}");
-        }
-        for (int c = 0; c < config_.commands_per_tick; ++c) {
-            ServoCommand& cmd = command_scratch_;
-            if (!commands_->pop(cmd)) break;
-            ++counts_.commands;
-            if (cmd.type == ServoCommandKind::SetWorkspace) {
-                work.set_workspace(cmd.workspace);
-                record_event(tick, kEventServoWorkspace,
-                             std::string_view(map_text, format_workspace(cmd.workspace, map_text, sizeof map_text)));
-            } else {
-                record_event(tick, cmd.kind_view(), cmd.text_view());
-            }
-        }
-
-        // Device -> step -> safety -> device.
-        const bool missed = late_wake || prev_overran;
-        const ServoTick::Out o = work.run(dev, model, safety, missed, dt_s);
-        const DeviceSample& sample = work.sample();
-        const StepResult& result = work.result();
-        const SafetyOutput& out = o.sent;
-        if (!o.read_ok) ++counts_.read_failures;
-        if (o.step_us >= 0.0) {
-            step_us_ring_[step_samples_ % step_us_ring_.size()] = static_cast<float>(o.step_us);
-            ++step_samples_;
-            step_max_us_ = std::max(step_max_us_, o.step_us);
-        }
-        ++counts_.status_counts[static_cast<std::size_t>(result.status)];
-        ++counts_.safety_counts[static_cast<std::size_t>(out.state)];
-        if (!finite(out.force_N) || !finite(out.torque_Nm)) counts_.non_finite_sent = true;
-        counts_.max_force_sent_N = std::max(counts_.max_force_sent_N, glm::length(out.force_N));
-        counts_.max_torque_sent_Nm = std::max(counts_.max_torque_sent_Nm, glm::length(out.torque_Nm));
-
-        // Record and publish.
+        // The work must end before the next deadline.
         const double time_s = static_cast<double>(wake - first_wake_ns_) * 1e-9;
-        TickSample ts;
-        ts.tick = tick;
-        ts.time_s = time_s;
-        ts.device_pose = sample.pose;
-        ts.buttons = sample.buttons;
-        ts.force_N = out.force_N;
-        ts.torque_Nm = out.torque_Nm;
-        ts.status = result.status;
-        ts.dt_s = dt_s;
-        ts.device_fault = sample.fault;
-        ts.device_read = o.read_ok;
-        ts.connected = sample.connected;
-        ts.deadline_missed = missed;
-        ts.safety_state = static_cast<uint8_t>(out.state);
-        ts.step_us = static_cast<float>(o.step_us);
-        if (recorder_ && !recorder_->add_tick(ts)) ++counts_.record_drops;
-        if (trace_count_ < trace_.size()) trace_[trace_count_++] = ts;
-
-        // Deadline check: the work must end before the next deadline. Judged before publishing
-        // (the only step after it), so the snapshot's miss count includes this tick.
-        const int64_t end = now_ns();
-        prev_overran = end > deadline + period_ns;
-        if (prev_overran) ++counts_.deadline_misses;
-
-        ServoSnapshot snap;
-        snap.tick = tick;
-        snap.time_s = time_s;
-        snap.haptic = work.haptic();
-        snap.graphic = result.graphic;
-        snap.force_N = out.force_N;
-        snap.torque_Nm = out.torque_Nm;
-        snap.rendered_force_N = result.force_N;
-        snap.rendered_torque_Nm = result.torque_Nm;
-        snap.safety = out.state;
-        snap.status = result.status;
-        snap.device_ok = o.read_ok;
-        snap.deadline_misses = counts_.deadline_misses;
-        snap.step_us = static_cast<float>(o.step_us);
-        snap.telemetry_drops = counts_.telemetry_drops;
-        snap.tick_check = tick;
-        // A queued sample carries the drops before it; the published one also counts its own.
-        if (telemetry_ && !telemetry_->push(snap)) snap.telemetry_drops = ++counts_.telemetry_drops;
-        published_.store(snap);
+        int64_t end = 0;
+        prev_overran = tick_body(tick, time_s, dt_s, late_wake || prev_overran, deadline + period_ns, end);
         ++tick;
 
         // After an overrun the missed slots are dropped rather than run back to back.
@@ -305,6 +225,133 @@ void ServoLoop::run() noexcept {
     }
     counts_.ticks = tick;
     running_.store(false, std::memory_order_release);
+}
+
+void ServoLoop::prepare() noexcept {
+    work_.begin(*device_, *model_, config_.workspace, config_.anchor ? &config_.anchor_position_m : nullptr);
+    if (config_.anchor) begin_text_ = format_servo_begin(work_.workspace(), config_.safety);  // the anchored map
+    record_event(0, kEventServoBegin, begin_text_);
+}
+
+ServoSnapshot make_snapshot(const ServoTick& work, const ServoTick::Out& out, uint64_t tick, double time_s) noexcept {
+    const StepResult& result = work.result();
+    ServoSnapshot snap;
+    snap.tick = tick;
+    snap.time_s = time_s;
+    snap.haptic = work.haptic();
+    snap.graphic = result.graphic;
+    snap.force_N = out.sent.force_N;
+    snap.torque_Nm = out.sent.torque_Nm;
+    snap.rendered_force_N = result.force_N;
+    snap.rendered_torque_Nm = result.torque_Nm;
+    snap.safety = out.sent.state;
+    snap.status = result.status;
+    snap.device_ok = out.read_ok;
+    snap.step_us = static_cast<float>(out.step_us);
+    snap.tick_check = tick;
+    return snap;
+}
+
+bool ServoLoop::tick_body(uint64_t tick, double time_s, double dt_s, bool missed, int64_t overrun_at_ns,
+                          int64_t& end_ns) noexcept {
+    Device& dev = *device_;
+    const Model& model = *model_;
+    SafetyLayer& safety = *safety_;
+    ServoTick& work = work_;
+    char map_text[160];
+
+    // Requests from other threads, applied (and recorded) before this tick's work.
+    if (estop_request_.exchange(false, std::memory_order_acq_rel)) {
+        safety.emergency_stop();
+        record_event(tick, kEventServoEStop, "{}");
+    }
+    if (reset_request_.exchange(false, std::memory_order_acq_rel)) {
+        safety.reset();
+        record_event(tick, kEventServoReset, "{}");
+    }
+    for (int c = 0; c < config_.commands_per_tick; ++c) {
+        ServoCommand& cmd = command_scratch_;
+        if (!commands_->pop(cmd)) break;
+        ++counts_.commands;
+        if (cmd.type == ServoCommandKind::SetWorkspace) {
+            work.set_workspace(cmd.workspace);
+            record_event(tick, kEventServoWorkspace,
+                         std::string_view(map_text, format_workspace(cmd.workspace, map_text, sizeof map_text)));
+        } else {
+            ++counts_.events_taken;
+            record_event(tick, cmd.kind_view(), cmd.text_view());
+        }
+    }
+
+    // Device -> step -> safety -> device.
+    const ServoTick::Out o = work.run(dev, model, safety, missed, dt_s);
+    const DeviceSample& sample = work.sample();
+    const StepResult& result = work.result();
+    const SafetyOutput& out = o.sent;
+    if (!o.read_ok) ++counts_.read_failures;
+    if (o.step_us >= 0.0) {
+        step_us_ring_[step_samples_ % step_us_ring_.size()] = static_cast<float>(o.step_us);
+        ++step_samples_;
+        step_max_us_ = std::max(step_max_us_, o.step_us);
+    }
+    ++counts_.status_counts[static_cast<std::size_t>(result.status)];
+    ++counts_.safety_counts[static_cast<std::size_t>(out.state)];
+    if (!finite(out.force_N) || !finite(out.torque_Nm)) counts_.non_finite_sent = true;
+    counts_.max_force_sent_N = std::max(counts_.max_force_sent_N, glm::length(out.force_N));
+    counts_.max_torque_sent_Nm = std::max(counts_.max_torque_sent_Nm, glm::length(out.torque_Nm));
+
+    // Record.
+    TickSample ts;
+    ts.tick = tick;
+    ts.time_s = time_s;
+    ts.device_pose = sample.pose;
+    ts.buttons = sample.buttons;
+    ts.force_N = out.force_N;
+    ts.torque_Nm = out.torque_Nm;
+    ts.status = result.status;
+    ts.dt_s = dt_s;
+    ts.device_fault = sample.fault;
+    ts.device_read = o.read_ok;
+    ts.connected = sample.connected;
+    ts.deadline_missed = missed;
+    ts.safety_state = static_cast<uint8_t>(out.state);
+    ts.step_us = static_cast<float>(o.step_us);
+    if (recorder_ && !recorder_->add_tick(ts)) ++counts_.record_drops;
+    if (trace_count_ < trace_.size()) trace_[trace_count_++] = ts;
+
+    // Deadline check: the work must end before the next deadline. Judged before publishing
+    // (the only step after it), so the snapshot's miss count includes this tick.
+    bool overran = false;
+    if (overrun_at_ns > 0) {
+        end_ns = now_ns();
+        overran = end_ns > overrun_at_ns;
+        if (overran) ++counts_.deadline_misses;
+    }
+
+    // Publish.
+    ServoSnapshot snap = make_snapshot(work, o, tick, time_s);
+    snap.deadline_misses = counts_.deadline_misses;
+    snap.telemetry_drops = counts_.telemetry_drops;
+    snap.events_taken = counts_.events_taken;
+    // A queued sample carries the drops before it; the published one also counts its own.
+    if (telemetry_ && !telemetry_->push(snap)) snap.telemetry_drops = ++counts_.telemetry_drops;
+    published_.store(snap);
+    return overran;
+}
+
+bool ServoLoop::step_manual() noexcept {
+    if (!manual_active_ || !running_.load(std::memory_order_relaxed)) return false;
+    const uint64_t tick = manual_tick_;
+    const double time_s = static_cast<double>(tick) / config_.rate_hz;
+    if (config_.duration_s > 0.0 && time_s >= config_.duration_s) {
+        running_.store(false, std::memory_order_release);  // ended by its duration, as the thread would
+        return false;
+    }
+    int64_t end = 0;
+    (void)tick_body(tick, time_s, 1.0 / config_.rate_hz, false, 0, end);
+    manual_tick_ = tick + 1;
+    counts_.ticks = manual_tick_;
+    return true;
 }
 
 void ServoLoop::record_event(uint64_t tick, std::string_view kind, std::string_view json) noexcept {
@@ -331,8 +378,14 @@ std::string ServoLoop::set_workspace(const WorkspaceMap& map) {
 }
 
 void ServoLoop::finish() {
-    if (!thread_.joinable()) return;
-    thread_.join();
+    if (manual_active_) {
+        manual_active_ = false;
+        running_.store(false, std::memory_order_release);
+    } else if (thread_.joinable()) {
+        thread_.join();
+    } else {
+        return;
+    }
     if (device_) {
         device_->write(Vec3(0.0), Vec3(0.0));
         device_->stop();

@@ -1,4 +1,4 @@
-// Crash-safe session recording, format "sulcus.recording/1" (docs/recording-format.md).
+// Crash-safe session recording, format "sulcus.recording/2" (docs/recording-format.md).
 //
 // A session is a file header followed by self-checking chunks (each with its own CRC-32), written
 // whole with write(2). A crash at any moment leaves a file whose chunks up to the last complete one
@@ -59,8 +59,20 @@ struct RecordingEvent {
     std::string json;
 };
 
+// A named JSON document stored alongside the session (e.g. a lesson's score sheet), written after
+// the ticks and events added before it. `tick`: the number of ticks added before it.
+struct RecordingAnnex {
+    uint64_t tick = 0;
+    std::string name;
+    std::string json;
+};
+
+// Largest annex: name + JSON text.
+inline constexpr std::size_t kMaxAnnexBytes = std::size_t{16} << 20;
+
 struct RecordingMetadata {
     std::string case_path;   // scene or case file the session ran
+    std::string lesson;      // lesson file the session ran, relative to the content root; "" none
     std::string device;      // device name ("phantom-omni", "mouse", "replay", ...)
     double rate_hz = 1000.0;  // servo rate
     std::string start_time;  // ISO 8601 UTC; empty: the time open() is called
@@ -82,6 +94,7 @@ struct RecordingOptions {
 struct RecordingStats {
     uint64_t ticks_written = 0;
     uint64_t events_written = 0;
+    uint64_t annexes_written = 0;
     uint64_t ticks_dropped = 0;   // add_tick() found the ring full (flush not keeping up)
     uint64_t events_dropped = 0;  // ring full or event larger than max_event_bytes
     uint64_t chunks_written = 0;
@@ -90,6 +103,8 @@ struct RecordingStats {
     double last_flush_us = 0.0;   // wall time of the last flush that wrote, I/O and sync included
     double max_flush_us = 0.0;
 };
+
+struct RecordingRead;
 
 class RecordingWriter {
 public:
@@ -113,6 +128,12 @@ public:
     // full, closed, or kind + json is longer than max_event_bytes.
     bool add_event(uint64_t tick, std::string_view kind, std::string_view json) noexcept;
 
+    // For a non-servo thread (allocates, takes the consumer mutex): queues a named JSON document,
+    // written by the next flush() or close() after every tick and event added before this call,
+    // at tick index = the number of ticks added so far. Returns "" or a one-line error (closed, or
+    // name + json longer than kMaxAnnexBytes). The text is stored as given (not parsed).
+    std::string add_annex(std::string_view name, std::string_view json);
+
     // Consumer: writes every tick and event added so far as whole chunks (<= ticks_per_chunk ticks
     // each, one write(2) per chunk), then syncs per the policy. Returns "" or a one-line error.
     // Serialised with other consumers (the writer thread) by a mutex the producers never take.
@@ -129,6 +150,10 @@ public:
     RecordingStats stats() const;
 
 private:
+    // add_annex with the tick given (a rewrite keeps each stored annex's tick).
+    std::string queue_annex(uint64_t tick, std::string_view name, std::string_view json);
+    friend std::string write_recording(const std::string& path, const RecordingRead& recording, SyncPolicy sync);
+
     struct Impl;
     std::unique_ptr<Impl> impl_;
     int fd_ = -1;
@@ -150,11 +175,19 @@ struct RecordingRead {
     RecordingMetadata metadata;  // parsed from it
     std::vector<TickSample> ticks;          // in file order
     std::vector<RecordingEvent> events;     // in file order
+    std::vector<RecordingAnnex> annexes;    // in file order
     RecordingTruncation truncation;
     bool ok() const { return error.empty(); }
 };
 
 RecordingRead read_recording(const std::string& path);
+
+// Writes `recording` as a new file at `path`: its metadata (start_time kept as given), ticks,
+// events in file order and then its annexes, e.g. to rewrite a recording with an edited annex.
+// Written under a temporary name beside `path`, then renamed over it, so `path` is never seen
+// half-written. Returns "" or a one-line error naming the file.
+std::string write_recording(const std::string& path, const RecordingRead& recording,
+                            SyncPolicy sync = SyncPolicy::None);
 
 // CRC-32 (IEEE 802.3, reflected polynomial 0xEDB88320, as zlib's crc32). Pass the previous value
 // to continue a running checksum; start from 0.

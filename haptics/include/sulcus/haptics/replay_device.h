@@ -7,9 +7,11 @@
 #include "sulcus/haptics/device.h"
 #include "sulcus/haptics/recording.h"
 #include "sulcus/haptics/safety.h"
+#include "sulcus/haptics/servo_loop.h"
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -83,5 +85,22 @@ struct ReplayResult {
 // without them, with its nominal_dt_s replaced by 1 / rate, as the loop does. Deterministic: the same
 // recording and model give the same result, bit for bit.
 ReplayResult replay_recording(const RecordingRead& recording, const Model& model, const SafetyConfig& safety);
+
+// What a replay shows a consumer (a lesson runtime recomputing scores) tick by tick: the same
+// stream the live loop gives through its telemetry and post_event. Either callback may be empty.
+struct ReplayObserver {
+    // A UI or lesson event (kind not starting with "servo."), in file order, after the servo
+    // commands of the tick it belongs to and before that tick's work. An event whose tick is past
+    // the last recorded tick comes after the last on_tick.
+    std::function<void(const RecordingEvent&)> on_event;
+    // After each tick's work: the snapshot the live loop published for it (make_snapshot), with
+    // tick, time_s and step_us as recorded, events_taken = UI and lesson events delivered so far,
+    // deadline_misses = recorded ticks flagged deadline_missed so far, telemetry_drops = 0.
+    std::function<void(const ServoSnapshot&)> on_tick;
+};
+
+// As above, and tells `observer` of every event and tick as it goes.
+ReplayResult replay_recording(const RecordingRead& recording, const Model& model, const SafetyConfig& safety,
+                              const ReplayObserver& observer);
 
 }  // namespace sulcus

@@ -2,7 +2,8 @@
 // Each tick: device.read -> renderer step -> safety layer -> device.write -> recorder.add_tick,
 // then the tick's outcome is published to other threads through a seqlock. Nothing in a tick
 // allocates, locks or does I/O: buffers are sized at start(), statistics live in fixed arrays,
-// and percentiles are computed after stop().
+// and percentiles are computed after stop(). With ServoConfig::manual_clock there is no thread:
+// the caller runs the same tick body one tick at a time (ServoLoop::step_manual) on a fixed clock.
 #pragma once
 
 #include "sulcus/engine/renderer.h"
@@ -123,8 +124,18 @@ struct ServoSnapshot {
     uint64_t deadline_misses = 0;
     float step_us = -1.0f;
     uint64_t telemetry_drops = 0;
+    // UI and lesson events (ServoLoop::post_event) taken so far, this tick's included: the change
+    // from the previous snapshot is how many were recorded at this tick, in the order posted.
+    uint64_t events_taken = 0;
     uint64_t tick_check = 0;   // == tick
 };
+
+// The snapshot of one tick's work as the loop publishes it: tick, time, haptic and graphic pose,
+// sent and rendered wrench, safety and step status, device_ok, step_us and tick_check. The
+// counters (deadline_misses, telemetry_drops, events_taken) are left zero for the caller. The
+// live loop and the headless replay both make theirs here, so a replay's snapshot equals the
+// live one field by field.
+ServoSnapshot make_snapshot(const ServoTick& work, const ServoTick::Out& out, uint64_t tick, double time_s) noexcept;
 
 struct ServoConfig {
     double rate_hz = 1000.0;
@@ -156,6 +167,12 @@ struct ServoConfig {
     // drains it each frame to plot forces. The servo thread never waits for it: a full queue drops
     // the sample and counts it (ServoStats::telemetry_drops). 0: no telemetry.
     std::size_t telemetry_queue = 0;
+    // Manual clock: start() prepares everything (device started, servo.begin recorded, step warmed
+    // up, anchor applied) but spawns no thread; each ServoLoop::step_manual() runs one tick on the
+    // caller's thread with time_s = tick / rate_hz, dt_s = 1 / rate_hz and no deadline missed.
+    // try_realtime is ignored; period and jitter statistics stay zero. For headless runs and tests
+    // that must be reproducible bit for bit.
+    bool manual_clock = false;
 };
 
 // Period histogram: 0 .. 5 ms in 10 us bins, plus one overflow bin.
@@ -182,6 +199,7 @@ struct ServoStats {
     uint64_t record_drops = 0;       // recorder.add_tick() refused (ring full)
     uint64_t event_drops = 0;        // recorder.add_event() refused (ring full or too long)
     uint64_t commands = 0;           // queued commands applied
+    uint64_t events_taken = 0;       // of them, post_event commands (UI and lesson events)
     uint64_t telemetry_drops = 0;    // telemetry samples dropped (queue full)
     std::array<uint64_t, kStepStatusCount> status_counts{};
     std::array<uint64_t, 6> safety_counts{};  // ticks per SafetyState (enum order)
@@ -201,18 +219,30 @@ public:
     ServoLoop& operator=(const ServoLoop&) = delete;
 
     // Starts the device (device.start()) and the servo thread, and returns once the thread has
-    // set its priority and warmed the step up (first-call scratch), before its first tick.
+    // set its priority and warmed the step up (first-call scratch), before its first tick. With
+    // ServoConfig::manual_clock the same preparation happens on the calling thread and no thread
+    // is started: the caller ticks with step_manual().
     // `model`, `device` and `recorder` (may be null; the caller opens it, runs its writer thread
     // and closes it after stop()) must outlive the loop. The renderer state starts at the
     // device's first pose. The device pose is used as the haptic pose in the world frame.
     // Returns "" or one line saying why the loop did not start.
     std::string start(const ServoConfig& config, Device& device, const Model& model,
                       RecordingWriter* recorder = nullptr);
-    // Asks the loop to end, waits for it, sends one zero wrench and stops the device.
+    // Asks the loop to end, waits for it, sends one zero wrench and stops the device. In manual
+    // mode there is no thread to wait for; the rest is the same.
     void stop();
-    // Waits for a loop with a duration to end by itself, then as stop().
+    // Waits for a loop with a duration to end by itself, then as stop(). In manual mode: as stop().
     void wait();
     bool running() const noexcept { return running_.load(std::memory_order_acquire); }
+
+    // Manual clock only (ServoConfig::manual_clock): runs exactly one tick on the calling thread,
+    // the threaded loop's own tick body (commands, device, step, safety, recording, trace,
+    // telemetry, latest(), statistics), with time_s = tick / rate_hz, dt_s = 1 / rate_hz and
+    // deadline_missed = false; never sleeps. False, and no tick, when the loop was not started in
+    // manual mode, after stop(), or once tick / rate_hz reaches a positive duration_s (the loop
+    // then counts as ended, as the threaded one does). Not concurrently with start() or stop().
+    bool step_manual() noexcept;
+    bool manual() const noexcept { return manual_active_; }
 
     // The latest tick's outcome; false before the first tick. Lock-free, any thread.
     bool latest(ServoSnapshot& out) const noexcept { return published_.load(out); }
@@ -245,6 +275,15 @@ public:
 
 private:
     void run() noexcept;
+    // Before the first tick, on the thread that will tick: the renderer state at the device's
+    // first pose (anchored when asked), the warm-up step, and the servo.begin event.
+    void prepare() noexcept;
+    // One tick's work, shared by the threaded loop and step_manual(): commands, device -> step ->
+    // safety -> device, statistics, recording, trace, deadline check, telemetry and publication.
+    // `overrun_at_ns` > 0: the work overran when it ended after that time (threaded loop; `end_ns`
+    // gets the end time); 0: no deadline (manual clock). Returns whether the work overran.
+    bool tick_body(uint64_t tick, double time_s, double dt_s, bool missed, int64_t overrun_at_ns,
+                   int64_t& end_ns) noexcept;
     void finish();
     std::string push(const ServoCommand& command);
     void record_event(uint64_t tick, std::string_view kind, std::string_view json) noexcept;
@@ -254,7 +293,10 @@ private:
     const Model* model_ = nullptr;
     RecordingWriter* recorder_ = nullptr;
     std::unique_ptr<SafetyLayer> safety_;
+    ServoTick work_;                // the tick's work (servo thread, or the manual caller)
     std::thread thread_;
+    bool manual_active_ = false;    // started with manual_clock and not yet stopped
+    uint64_t manual_tick_ = 0;      // the next manual tick's index
     std::atomic<bool> stop_request_{false};
     std::atomic<bool> running_{false};
     std::atomic<bool> ready_{false};
