@@ -42,12 +42,17 @@ const ChartSession::Entry* ChartSession::find(int fdi, Site site) const {
     return it == teeth_.end() ? nullptr : &it->second[static_cast<std::size_t>(site)];
 }
 
+double chart_depth_mm(double depth_m) {
+    if (!std::isfinite(depth_m)) return NAN;
+    // Nearest whole millimetre, halves up; the small allowance keeps 2.5 mm given as 0.0025 m a half.
+    const double mm = std::max(0.0, depth_m * 1e3);
+    return std::min(std::floor(mm + 0.5 + 1e-9), kMaxProbingDepthMm);
+}
+
 bool ChartSession::record_depth(int fdi, Site site, double depth_m) {
     Entry* e = find(fdi, site);
     if (!e || !std::isfinite(depth_m)) return false;
-    // Nearest whole millimetre, halves up; the small allowance keeps 2.5 mm given as 0.0025 m a half.
-    const double mm = std::max(0.0, depth_m * 1e3);
-    e->pd_mm = std::min(std::floor(mm + 0.5 + 1e-9), kMaxProbingDepthMm);
+    e->pd_mm = chart_depth_mm(depth_m);
     return true;
 }
 

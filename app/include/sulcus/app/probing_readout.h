@@ -38,6 +38,11 @@ struct ProbeReading {
 ProbeReading read_probe(const std::vector<SiteFrame>& sites, const Pose& probe_pose,
                         double capture_radius_m = kProbeCaptureRadius_m);
 
+// The depth a clinician charts for a reading (metres): the nearest whole millimetre, a half
+// rounding up (2.49 mm -> 2, 2.5 mm -> 3; within 1e-9 mm of a half counts as the half); 0 at or
+// above the margin; at most kMaxProbingDepthMm. NaN for a depth that is not finite.
+double chart_depth_mm(double depth_m);
+
 // One site of ChartSession::compare.
 struct SiteComparison {
     int fdi = 0;
