@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # Builds Sulcus and runs it. With a display and the desktop app built, starts the app with the
-# given arguments; otherwise runs every paper scene headless (content/assets/scenes/paper/*.json)
-# into out/paper/<scene>/ and the bundled healthy_11 case into out/cases/healthy_11/, with plots,
-# printing each run's summary line. Exits non-zero when any run does.
+# given arguments (by default the bundled healthy_11 lesson); otherwise replays the bundled
+# healthy_11 lesson recording headless, checks its scores and writes its report to
+# out/replay/healthy_11.html (and .json), then runs every paper scene headless
+# (content/assets/scenes/paper/*.json) into out/paper/<scene>/ and the bundled healthy_11 case
+# into out/cases/healthy_11/, with plots, printing each run's summary line. Exits non-zero when
+# any run does.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
@@ -26,6 +29,19 @@ if [ ${#scenes[@]} -eq 0 ]; then
 fi
 
 worst=0
+# The bundled lesson, recorded with the simulated hand, replayed and scored again.
+status=0
+mkdir -p out/replay
+build/bin/sulcus-cli replay content/assets/recordings/healthy_11.rec --check \
+  --report out/replay/healthy_11.html || status=$?
+build/bin/sulcus-cli replay content/assets/recordings/healthy_11.rec \
+  --report out/replay/healthy_11.json >/dev/null || status=$?
+if [ "$status" -ne 0 ]; then
+  echo "run: content/assets/recordings/healthy_11.rec: the replay exited with status $status" >&2
+  worst=$status
+else
+  echo "run: the session report is out/replay/healthy_11.html"
+fi
 for scene in "${scenes[@]}"; do
   name=$(basename "$scene" .json)
   status=0

@@ -26,4 +26,10 @@ int cmd_servo(const std::vector<std::string>& args);
 extern const char* const kHelpDevices;
 int cmd_devices(const std::vector<std::string>& args);
 
+extern const char* const kHelpReplay;
+int cmd_replay(const std::vector<std::string>& args);
+
+extern const char* const kHelpLesson;
+int cmd_lesson(const std::vector<std::string>& args);
+
 }  // namespace sulcus::cli

@@ -36,6 +36,9 @@ const char* kHelpMain =
     "  servo --device sim [--scene FILE] [--seconds N] [--record FILE]\n"
     "                                        the real-time servo loop with a device\n"
     "  devices [--json]                      list attached haptic and 6-DOF devices\n"
+    "  replay RECORDING|FOLDER... [--check] [--report FILE] [--jobs N] [--shard I/N] [--junit FILE]\n"
+    "                                        replay recorded lessons headless and score them\n"
+    "  lesson check|new|record ...           validate, start or record a lesson\n"
     "  help [COMMAND]                        show help for a command\n"
     "\n"
     "exit status: 0 done; 1 ran, but a requested check failed; 2 bad input or usage;\n"
@@ -123,6 +126,14 @@ int cmd_help(const std::vector<std::string>& args) {
         std::fputs(kHelpDevices, stdout);
         return kOk;
     }
+    if (args[0] == "replay") {
+        std::fputs(kHelpReplay, stdout);
+        return kOk;
+    }
+    if (args[0] == "lesson") {
+        std::fputs(kHelpLesson, stdout);
+        return kOk;
+    }
     return usage("help: unknown command '" + args[0] + "'");
 }
 
@@ -141,6 +152,8 @@ int main(int argc, char** argv) {
         if (cmd == "tissue") return cmd_tissue(args);
         if (cmd == "servo") return cmd_servo(args);
         if (cmd == "devices") return cmd_devices(args);
+        if (cmd == "replay") return cmd_replay(args);
+        if (cmd == "lesson") return cmd_lesson(args);
         if (cmd == "help" || cmd == "--help" || cmd == "-h") return cmd_help(args);
         return usage("unknown command '" + cmd + "'");
     } catch (const std::exception& e) {
