@@ -1,10 +1,12 @@
 // The desktop app end to end: screenshots under Xvfb (Mesa llvmpipe) show the case, the tooth and
 // the probe; a 60 s session driven by real pointer events runs and reports the servo loop's
-// deadline misses; the headless command line links no window, GL or GUI library.
+// deadline misses; a live lesson is recorded and replays to the same scores; the headless command
+// line links no window, GL or GUI library.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <stb/stb_image.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <cstdlib>
@@ -81,7 +83,7 @@ TEST(App, ScreenshotShowsTheToothAndTheProbe) {
     const std::string dir = temp_dir("screenshot");
     const std::string shot = dir + "/shot.png", ids = dir + "/ids.png";
     // The quadrant from buccal of sextant 6, gingiva see-through, the probe where the case starts it.
-    const Shell r = run("xvfb-run -a -s '-screen 0 1920x1080x24' " + kApp + " --case " + kCases +
+    const Shell r = run("xvfb-run -a -n 117 -s '-screen 0 1920x1080x24' " + kApp + " --case " + kCases +
                       "/quadrant_44_47 --device mouse --frames 20 --size 1280x720 --gingiva 0.4 --sextant 6 "
                       "--screenshot " + shot + " --ids " + ids);
     ASSERT_EQ(r.status, 0) << r.output;
@@ -160,7 +162,7 @@ TEST(App, NoDisplayIsAClearError) {
 // With no Phantom answering, the default device is the mouse, and the app says why.
 TEST(App, AutoDeviceFallsBackToTheMouse) {
     REQUIRE_APP();
-    const Shell r = run("SULCUS_LIBHD=/nonexistent/libHD.so xvfb-run -a -s '-screen 0 1280x800x24' " + kApp +
+    const Shell r = run("SULCUS_LIBHD=/nonexistent/libHD.so xvfb-run -a -n 124 -s '-screen 0 1280x800x24' " + kApp +
                         " --case " + kCases + "/healthy_11 --frames 3 --size 800x600");
     ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("/nonexistent/libHD.so"), std::string::npos) << r.output;
@@ -173,7 +175,7 @@ TEST(App, AutoDeviceFallsBackToTheMouse) {
 TEST(App, SimulatedHandChartsEverySite) {
     REQUIRE_APP();
     const std::string dir = temp_dir("sim");
-    const Shell r = run("xvfb-run -a -s '-screen 0 1280x800x24' " + kApp + " --case " + kCases +
+    const Shell r = run("xvfb-run -a -n 131 -s '-screen 0 1280x800x24' " + kApp + " --case " + kCases +
                         "/healthy_11 --device sim --ticks 8600 --size 800x600 --report " + dir + "/report.json");
     ASSERT_EQ(r.status, 0) << r.output;
     std::ifstream in(dir + "/report.json");
@@ -183,13 +185,116 @@ TEST(App, SimulatedHandChartsEverySite) {
     EXPECT_EQ(j.at("sites_charted").get<int>(), 6);
 }
 
+// A lesson run live by the simulated hand: every chart entry goes through the servo loop as a
+// posted event, the live runtime scores it, the scores are stored in the recording, and the
+// headless replay of that recording recomputes them bit for bit (`sulcus-cli replay --check`).
+TEST(App, LiveLessonScoresEqualTheReplayedOnes) {
+    REQUIRE_APP();
+    const std::string dir = temp_dir("lesson");
+    const std::string rec = dir + "/R.rec", report = dir + "/report.json";
+    const std::string lesson = std::string(SULCUS_SOURCE_DIR) + "/content/assets/lessons/healthy_11.json";
+    // 8700 ticks: the hand's whole probing script of healthy_11 (8.58 s at 1 kHz) and a little more.
+    const Shell r = run("xvfb-run -a -n 138 -s '-screen 0 1280x800x24' " + kApp + " --lesson " + lesson +
+                        " --device sim --record " + rec + " --ticks 8700 --frames 2 --size 800x600 --report " + report);
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("session recorded to " + rec), std::string::npos) << r.output;
+
+    std::ifstream in(report);
+    ASSERT_TRUE(in) << report;
+    const nlohmann::json j = nlohmann::json::parse(in);
+    ASSERT_TRUE(j.contains("lesson")) << j.dump(2);
+    const nlohmann::json& l = j.at("lesson");
+    EXPECT_EQ(l.at("title").get<std::string>(), "Healthy 11: six sites");
+    EXPECT_EQ(l.at("sites_target").get<int>(), 6);
+    EXPECT_EQ(l.at("sites_charted").get<int>(), 6) << "the hand's entries reached the lesson";
+    EXPECT_GT(l.at("overall").get<double>(), 0.0);
+    EXPECT_EQ(l.at("recording").get<std::string>(), rec);
+    EXPECT_EQ(j.at("sites_charted").get<int>(), 6) << "the chart panel shows what was posted";
+
+    const Shell check = run(kCli + " replay " + rec + " --check");
+    EXPECT_EQ(check.status, 0) << check.output;
+}
+
+// When the UI's telemetry queue overflows the live runtime misses ticks: the app then scores the
+// session by replaying its recording and stores those scores, so the check still passes.
+TEST(App, DroppedTelemetryIsScoredFromTheRecording) {
+    REQUIRE_APP();
+    const std::string dir = temp_dir("drops");
+    const std::string rec = dir + "/R.rec", report = dir + "/report.json";
+    const std::string lesson = std::string(SULCUS_SOURCE_DIR) + "/content/assets/lessons/healthy_11.json";
+    // 16 ticks of queue against frames of tens of milliseconds: samples are dropped.
+    const Shell r = run("xvfb-run -a -n 145 -s '-screen 0 1280x800x24' " + kApp + " --lesson " + lesson +
+                        " --device sim --record " + rec + " --telemetry-queue 16 --ticks 3000 --frames 2 --size 800x600"
+                        " --report " + report);
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("scoring the session from its recording"), std::string::npos) << r.output;
+    std::ifstream in(report);
+    ASSERT_TRUE(in) << report;
+    const nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_GT(j.at("servo").at("telemetry_drops").get<uint64_t>(), 0u);
+    ASSERT_TRUE(j.contains("lesson"));
+    EXPECT_GE(j.at("lesson").at("sites_charted").get<int>(), 1);
+    const Shell check = run(kCli + " replay " + rec + " --check");
+    EXPECT_EQ(check.status, 0) << check.output;
+}
+
+// With a lesson and no --record the session goes to the sessions folder, named after the lesson
+// and the UTC time; it replays to the stored scores too (here a lesson ended before any charting).
+TEST(App, LessonIsRecordedToTheSessionsFolderByDefault) {
+    REQUIRE_APP();
+    const std::string dir = temp_dir("sessions");
+    const std::string lesson = std::string(SULCUS_SOURCE_DIR) + "/content/assets/lessons/healthy_11.json";
+    const Shell r = run("SULCUS_SESSIONS_DIR=" + dir + " xvfb-run -a -n 152 -s '-screen 0 1280x800x24' " + kApp +
+                        " --lesson " + lesson + " --device sim --ticks 200 --frames 2 --size 800x600");
+    ASSERT_EQ(r.status, 0) << r.output;
+    std::vector<std::string> files;
+    for (const auto& e : fs::directory_iterator(dir)) files.push_back(e.path().filename().string());
+    ASSERT_EQ(files.size(), 1u);
+    EXPECT_TRUE(std::regex_match(files[0], std::regex(R"(healthy_11-\d{8}T\d{6}Z\.rec)"))) << files[0];
+    const Shell check = run(kCli + " replay " + dir + "/" + files[0] + " --check");
+    EXPECT_EQ(check.status, 0) << check.output;
+
+    // --record none: nothing is written.
+    const std::string none = temp_dir("sessions_none");
+    const Shell r2 = run("SULCUS_SESSIONS_DIR=" + none + " xvfb-run -a -n 159 -s '-screen 0 1280x800x24' " + kApp +
+                         " --lesson " + lesson + " --device sim --record none --ticks 50 --frames 2 --size 800x600");
+    ASSERT_EQ(r2.status, 0) << r2.output;
+    EXPECT_TRUE(fs::is_empty(none));
+}
+
+// A lesson that does not load is one line naming the file, and exit 2.
+TEST(App, BadLessonFileIsOneLineAndExitTwo) {
+    REQUIRE_APP();
+    const std::string dir = temp_dir("bad_lesson");
+    const std::string bad = dir + "/lessons/bad.json";
+    fs::create_directories(dir + "/lessons");
+    std::ofstream(bad) << R"({"format": "sulcus.lesson/2", "title": "x", "steps": []})";
+    for (const std::string& path : {bad, dir + "/lessons/none.json"}) {
+        const Shell r = run(kApp + " --lesson " + path + " --frames 1");
+        EXPECT_EQ(r.status, 2) << r.output;
+        EXPECT_NE(r.output.find(path), std::string::npos) << r.output;
+        EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+    }
+}
+
+// Instructor mode opens with the reference chart editable and the save panel, and draws.
+TEST(App, InstructorModeRuns) {
+    REQUIRE_APP();
+    const std::string dir = temp_dir("instructor");
+    const Shell r = run("xvfb-run -a -n 166 -s '-screen 0 1280x800x24' " + kApp + " --case " + kCases +
+                        "/healthy_11 --instructor --device mouse --frames 3 --size 1280x720 --screenshot " + dir +
+                        "/shot.png");
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_EQ(load_png(dir + "/shot.png").w, 1280);
+}
+
 // A lesson session under Xvfb: the mouse device driven by real X pointer events for 60 s of servo
 // time; the app exits cleanly and reports the servo thread's deadline misses.
 TEST(App, MouseSessionOfSixtySecondsUnderXvfb) {
     REQUIRE_APP();
     const std::string dir = temp_dir("session");
     const std::string report = dir + "/report.json";
-    const Shell r = run("timeout 240 xvfb-run -a -s '-screen 0 1920x1080x24' " + std::string(SULCUS_SOURCE_DIR) +
+    const Shell r = run("timeout 240 xvfb-run -a -n 173 -s '-screen 0 1920x1080x24' " + std::string(SULCUS_SOURCE_DIR) +
                       "/tests/app/mouse_session.sh " + kApp + " " + kCases + "/healthy_11 60 " + report);
     ASSERT_EQ(r.status, 0) << r.output;
     std::ifstream in(report);

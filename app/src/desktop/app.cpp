@@ -23,6 +23,8 @@
 
 namespace sulcus::desktop {
 
+namespace fs = std::filesystem;
+
 namespace {
 
 constexpr double kFrameCapHz = 60.0;  // no faster, so the UI leaves the servo thread its core
@@ -51,6 +53,8 @@ App::App(AppOptions options) : options_(std::move(options)) {
 
 App::~App() {
     if (loop_.running()) loop_.stop();
+    if (recorder_) (void)recorder_->close();
+    if (instructor_ && instructor_->builder.joinable()) instructor_->builder.join();
     if (imgui_ready_) {
         ImGui_ImplOpenGL3_Shutdown();
         ImGui_ImplGlfw_Shutdown();
@@ -69,12 +73,14 @@ std::string App::load_case() {
     case_name_ = dir.filename().string();
     if (case_name_.empty()) case_name_ = dir.parent_path().filename().string();
     const std::string scene_path = (dir / "scene.json").string();
-    scene_ = load_scene(scene_path);
-    for (const std::string& w : scene_.scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
-    if (!scene_.ok()) return scene_.errors.front();
-    ModelBuild build = build_model(scene_.scene, RendererSettings{});
-    if (!build.model) return scene_path + ": " + build.error;
-    model_ = std::move(build.model);
+    if (!model_) {  // a lesson's case comes loaded
+        scene_ = load_scene(scene_path);
+        for (const std::string& w : scene_.scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+        if (!scene_.ok()) return scene_.errors.front();
+        ModelBuild build = build_model(scene_.scene, RendererSettings{});
+        if (!build.model) return scene_path + ": " + build.error;
+        model_ = std::move(build.model);
+    }
     start_pose_ = scene_.scene.trajectory.empty() ? Pose{} : scene_.scene.trajectory.front().pose;
 
     AssetLoad asset = read_glb((dir / "case.glb").string());
@@ -86,13 +92,20 @@ std::string App::load_case() {
     manifest_ = std::move(manifest.manifest);
     chart_.emplace(manifest_.chart);
     probed_at_.assign(manifest_.sites.size(), -1.0);
+    if (lesson_) lesson_->runtime = std::make_unique<LessonRuntime>(lesson_->load.lesson, manifest_.sites, manifest_.chart);
+    if (options_.instructor) {
+        instructor_ = std::make_unique<Instructor>();
+        instructor_->chart = manifest_.chart;
+        if (content_root_.empty()) content_root_ = options_.content_root.empty() ? default_content_root() : options_.content_root;
+    }
     return "";
 }
 
 std::string App::start_servo() {
     servo_config_ = ServoConfig{};
     servo_config_.rate_hz = scene_.scene.rate_hz;
-    servo_config_.telemetry_queue = 8192;
+    // A lesson's runtime needs every tick: room for 65 s of them should frames stall.
+    servo_config_.telemetry_queue = options_.telemetry_queue ? options_.telemetry_queue : lesson_ ? (1u << 16) : 8192;
     servo_config_.step_time_ring = 1u << 17;
 
     std::string why_not_phantom;
@@ -101,7 +114,8 @@ std::string App::start_servo() {
         // A Phantom is tried by starting the loop on it: no library or no device says why.
         servo_config_.anchor = true;
         servo_config_.anchor_position_m = start_pose_.position;
-        const std::string err = loop_.start(servo_config_, *phantom, *model_);
+        if (std::string e = open_recorder("phantom"); !e.empty()) return e;
+        const std::string err = loop_.start(servo_config_, *phantom, *model_, recorder_.get());
         if (err.empty()) {
             device_label_ = phantom->capabilities().name;
             device_ = std::move(phantom);
@@ -127,6 +141,7 @@ std::string App::start_servo() {
         }
         device_ = std::make_unique<SimulatedHand>(script, hand);
         device_label_ = "Simulated hand (" + device_->capabilities().name + ")";
+        if (std::string e = open_recorder("sim-hand"); !e.empty()) return e;
     } else if (options_.device == "spacemouse") {
         SpaceMouseDeviceConfig sm;
         sm.rate_hz = servo_config_.rate_hz;
@@ -135,6 +150,7 @@ std::string App::start_servo() {
         sm.workspace_max_m = start_pose_.position + Vec3(0.05);
         device_ = std::make_unique<SpaceMouseDevice>(sm);
         device_label_ = "SpaceMouse";
+        if (std::string e = open_recorder("spacemouse"); !e.empty()) return e;
     } else {
         MouseDeviceConfig mc;
         mc.rate_hz = servo_config_.rate_hz;
@@ -148,9 +164,10 @@ std::string App::start_servo() {
         driver_.set_bounds(mc.workspace_min_m, mc.workspace_max_m);
         if (!why_not_phantom.empty())
             std::fprintf(stderr, "sulcus: no haptic device (%s); the mouse drives the probe\n", why_not_phantom.c_str());
+        if (std::string e = open_recorder("mouse"); !e.empty()) return e;
     }
     driver_.reset(start_pose_);
-    return loop_.start(servo_config_, *device_, *model_);
+    return loop_.start(servo_config_, *device_, *model_, recorder_.get());
 }
 
 void App::set_view(int sextant, bool lingual) {
@@ -159,6 +176,12 @@ void App::set_view(int sextant, bool lingual) {
 }
 
 int App::run() {
+    if (!options_.lesson.empty()) {
+        if (std::string err = load_lesson_file(); !err.empty()) {
+            std::fprintf(stderr, "sulcus: %s\n", err.c_str());
+            return 2;
+        }
+    }
     if (std::string err = load_case(); !err.empty()) {
         std::fprintf(stderr, "sulcus: %s\n", err.c_str());
         return 2;
@@ -206,8 +229,30 @@ int App::run() {
     }
     set_view(options_.sextant, options_.lingual);
 
+    // Where the session is recorded: as asked, else a lesson's in the sessions folder.
+    if (options_.record != "none") record_path_ = options_.record;
+    if (options_.record.empty() && lesson_) {
+        const fs::path dir = sessions_dir();
+        std::error_code ec;
+        fs::create_directories(dir, ec);
+        if (ec) {
+            std::fprintf(stderr, "sulcus: %s: cannot create the sessions folder (%s); use --record FILE or --record none\n",
+                         dir.string().c_str(), ec.message().c_str());
+            return 2;
+        }
+        fs::path file = dir / session_file_name(options_.lesson, std::time(nullptr));
+        const std::string stem = file.stem().string();
+        for (int k = 2; fs::exists(file, ec); ++k) file = dir / (stem + "-" + std::to_string(k) + ".rec");
+        record_path_ = file.string();
+    }
     if (std::string err = start_servo(); !err.empty()) {
         std::fprintf(stderr, "sulcus: servo loop: %s\n", err.c_str());
+        if (recorder_) {  // no session: no recording of it
+            (void)recorder_->close();
+            recorder_.reset();
+            std::error_code ec;
+            fs::remove(record_path_, ec);
+        }
         return 2;
     }
     if (!loop_.realtime()) std::fprintf(stderr, "warning: %s\n", loop_.realtime_message().c_str());
@@ -244,8 +289,7 @@ int App::run() {
         if (next_frame > now) std::this_thread::sleep_for(std::chrono::duration<double>(next_frame - now));
         else next_frame = now;
     }
-    loop_.stop();
-    drain_telemetry();
+    if (int code = finish_session(); code != 0) exit_code = code;
     const ServoStats st = loop_.stats();
     const double wall = now_s() - t_start;
     std::printf("sulcus %s (%s): %d frames in %.1f s (%.1f fps); servo %llu ticks, %.1f Hz, deadline misses %llu, "
@@ -254,6 +298,11 @@ int App::run() {
                 static_cast<unsigned long long>(st.ticks), st.achieved_rate_hz,
                 static_cast<unsigned long long>(st.deadline_misses), st.step_us.p50, st.step_us.p99, st.step_us.max,
                 st.max_force_sent_N, chart_ ? chart_->sites_charted() : 0, chart_ ? chart_->sites_total() : 0);
+    if (lesson_ && lesson_->scores) {
+        const LessonScores& sc = *lesson_->scores;
+        std::printf("sulcus: lesson \"%s\": score %.3f (%s), charted %d/%d\n", lesson_->load.lesson.title.c_str(),
+                    sc.overall, sc.passed ? "passed" : "not passed", sc.sites_charted, sc.sites_target);
+    }
     if (!options_.report.empty()) write_report(wall);
     if (st.non_finite_sent) exit_code = 1;
     return exit_code;
@@ -279,6 +328,7 @@ void App::drain_telemetry() {
         const ProbeReading r = read_probe(manifest_.sites, s.graphic);
         if (r.site_index >= 0 && r.in_sulcus && r.depth_m > 1e-3 && probed_at_[size_t(r.site_index)] < 0)
             probed_at_[size_t(r.site_index)] = s.time_s;
+        if (lesson_) feed_lesson(s);
         if (options_.device == "sim") chart_pass(s, r);
         if (s.step_us > 0) step_max_window_ = std::max(step_max_window_, double(s.step_us));
         live_.step_us = s.step_us;
@@ -313,14 +363,15 @@ void App::chart_pass(const ServoSnapshot& s, const ProbeReading& r) {
         chart_reading(r);
         // The hand's trainee also notes bleeding, as the case's chart has it.
         if (const auto& rec = manifest_.chart.teeth.at(site.fdi).sites[size_t(site.site)]; rec && rec->bop)
-            chart_->set_bop(site.fdi, site.site, true);
+            chart_bop(site.fdi, site.site, true);
     }
 }
 
-// Charts the depth of a reading at its site and selects that site in the chart.
+// Charts the depth of a reading at its site (a posted event, as every chart entry is) and selects
+// that site in the chart.
 void App::chart_reading(const ProbeReading& r) {
     const SiteFrame& site = manifest_.sites[size_t(r.site_index)];
-    chart_->record_depth(site.fdi, site.site, r.depth_m);
+    chart_depth(site.fdi, site.site, chart_depth_mm(r.depth_m));
     ui_.selected_fdi = site.fdi;
     ui_.selected_site = int(site.site);
 }
@@ -510,6 +561,15 @@ void App::write_report(double wall_s) {
                   {"realtime", st.realtime}};
     j["sites_charted"] = chart_ ? chart_->sites_charted() : 0;
     j["sites_total"] = chart_ ? chart_->sites_total() : 0;
+    if (lesson_ && lesson_->scores) {
+        const LessonScores& sc = *lesson_->scores;
+        j["lesson"] = {{"title", lesson_->load.lesson.title},
+                       {"overall", sc.overall},
+                       {"passed", sc.passed},
+                       {"sites_charted", sc.sites_charted},
+                       {"sites_target", sc.sites_target},
+                       {"recording", record_path_.empty() ? nlohmann::json(nullptr) : nlohmann::json(record_path_)}};
+    }
     j["time_above_0_25_N_s"] = time_above_025_s_;
     j["haptic_travel_m"] = haptic_travel_m_;
     j["contact_ticks"] = contact_ticks_;

@@ -6,6 +6,7 @@
 #include "desktop/camera.h"
 #include "desktop/force_history.h"
 #include "desktop/scene_view.h"
+#include "sulcus/app/lesson_session.h"
 #include "sulcus/app/mouse_probe.h"
 #include "sulcus/app/probing_readout.h"
 #include "sulcus/content/asset.h"
@@ -15,8 +16,13 @@
 #include "sulcus/haptics/mouse_device.h"
 #include "sulcus/haptics/servo_loop.h"
 
+#include <atomic>
+#include <ctime>
+#include <deque>
 #include <memory>
+#include <mutex>
 #include <optional>
+#include <thread>
 #include <string>
 #include <vector>
 
@@ -39,7 +45,19 @@ struct AppOptions {
     bool lingual = false;
     bool reference = false;       // show the case's reference chart beside the trainee's
     int msaa = -1;                // samples per pixel of the 3D view; -1: 4, or 0 on a software renderer
+    std::string lesson;           // a lesson file (sulcus.lesson/1): its built case replaces case_dir
+    std::string content_root;     // the lessons' content root; empty: default_content_root()
+    std::string record;           // record the session here; "none": not at all; empty: a lesson's
+                                  // default (sessions_dir()/<lesson>-<UTC time>.rec), else none
+    bool instructor = false;      // the reference chart editable, saved as a case and a lesson
+    std::size_t telemetry_queue = 0;  // ticks the telemetry queue holds; 0: the default (tests set it small)
 };
+
+// Where sessions are recorded by default: $SULCUS_SESSIONS_DIR, else $XDG_DATA_HOME/sulcus/sessions,
+// else ~/.local/share/sulcus/sessions.
+std::string sessions_dir();
+// "<stem>-<UTC yyyymmddThhmmssZ>.rec" for a lesson file.
+std::string session_file_name(const std::string& lesson_path, std::time_t now);
 
 // What the panels show and change; the App owns it, panels.cpp draws it.
 struct UiState {
@@ -52,6 +70,34 @@ struct UiState {
     int selected_fdi = 0;
     int selected_site = -1;       // index into kAllSites
     double plot_window_s = 5.0;
+};
+
+// A running lesson: the runtime fed from the telemetry with the UI events the loop took, in order.
+struct LiveLesson {
+    LessonLoad load;
+    std::string path;          // as given
+    std::string relative;      // relative to the content root (the recording's metadata)
+    std::unique_ptr<LessonRuntime> runtime;
+    std::deque<std::pair<std::string, std::string>> posted;  // posted, not yet fed to the runtime
+    uint64_t fed = 0;          // events fed to the runtime (== the loop's events_taken after them)
+    uint64_t posted_total = 0; // events posted and accepted by the loop
+    std::optional<LessonScores> scores;  // once the lesson has ended
+    bool scores_replayed = false;        // computed by replaying the recording (telemetry dropped)
+};
+
+// Instructor mode: the case's reference chart as edited, and the save and case build.
+struct Instructor {
+    Chart chart;
+    char name[48] = "";
+    char title[160] = "";
+    std::string message;       // the last save's outcome
+    bool message_error = false;
+    // The case build on a background thread.
+    std::thread builder;
+    std::atomic<int> build_state{0};  // 0 idle, 1 building, 2 done, 3 failed
+    std::mutex build_mutex;
+    std::string build_message;        // under build_mutex
+    std::string build_command;        // the command that builds it by hand
 };
 
 struct LiveServo {
@@ -87,6 +133,19 @@ private:
     void panel_settings();
     void panel_inset();
     void set_view(int sextant, bool lingual);
+    // Lessons, events and recording (lesson_ui.cpp).
+    std::string load_lesson_file();
+    std::string open_recorder(const std::string& device_name);
+    bool post(const std::string& kind, const std::string& json);
+    void chart_depth(int fdi, Site site, double pd_mm);
+    void chart_bop(int fdi, Site site, bool bop);
+    void chart_gm(int fdi, Site site, double gm_mm);
+    bool lesson_site(int fdi) const;
+    void feed_lesson(const ServoSnapshot& s);
+    int finish_session();
+    void panel_lesson_steps();
+    void panel_instructor();
+    void instructor_save();
     bool write_png(const std::string& path, int w, int h, bool ids);
     void write_report(double wall_s);
 
@@ -96,7 +155,7 @@ private:
 
     // The case.
     SceneLoad scene_;
-    std::unique_ptr<Model> model_;
+    std::shared_ptr<Model> model_;
     Asset asset_;
     CaseManifest manifest_;
     std::string case_name_;
@@ -106,6 +165,12 @@ private:
     std::unique_ptr<Device> device_;
     MouseDevice* mouse_ = nullptr;  // device_ when it is the mouse
     std::string device_label_;
+    std::unique_ptr<RecordingWriter> recorder_;
+    std::string record_path_;
+    RecordingMetadata record_meta_;
+    std::optional<LiveLesson> lesson_;
+    std::string content_root_;
+    std::unique_ptr<Instructor> instructor_;
     ServoLoop loop_;
     ServoConfig servo_config_;
     MouseProbeDriver driver_;

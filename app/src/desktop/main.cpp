@@ -1,6 +1,8 @@
 // sulcus: the desktop app (docs/app.md).
 #include "desktop/app.h"
 
+#include "sulcus/app/lesson_session.h"
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -14,12 +16,24 @@ const char* const kHelp =
     "              [--screenshot FILE.png] [--ids FILE.png] [--frames N] [--seconds S] [--ticks N]\n"
     "              [--report FILE.json] [--size WxH] [--gingiva ALPHA] [--sextant 1-6]\n"
     "              [--lingual] [--reference] [--msaa N]\n"
+    "              [--lesson FILE [--content-root DIR]] [--record FILE|none] [--instructor]\n"
     "\n"
-    "Opens a patient case (a folder built by `sulcus-cli content case`, default the bundled\n"
-    "healthy_11) in a window: the probe in the pocket, the chart, the force, the device.\n"
-    "Without a haptic device the mouse drives the probe (docs/app.md).\n"
+    "Opens a patient case (a folder built by `sulcus-cli content case`) in a window: the probe in\n"
+    "the pocket, the chart, the force, the device. Without a haptic device the mouse drives the\n"
+    "probe (docs/app.md). With no --case, --lesson or --instructor it runs the bundled lesson\n"
+    "healthy_11 when it is found, else opens the bundled case healthy_11.\n"
     "\n"
     "  --case DIR        the case folder (scene.json, case.glb, case.json)\n"
+    "  --lesson FILE     run a lesson (sulcus.lesson/1, docs/lessons.md) on its built case (that\n"
+    "                    replaces --case): steps, hints, feedback and the scores at the end\n"
+    "  --content-root D  the folder the lesson's paths are relative to (default: the parent of the\n"
+    "                    lesson's folder; instructor saves go to the bundled content root)\n"
+    "  --record FILE     record the session (sulcus.recording/2) for `sulcus-cli replay`; a\n"
+    "                    lesson is recorded by default to $SULCUS_SESSIONS_DIR, else\n"
+    "                    $XDG_DATA_HOME/sulcus/sessions, else ~/.local/share/sulcus/sessions, as\n"
+    "                    <lesson>-<UTC time>.rec; --record none records nothing\n"
+    "  --instructor      edit the case's reference chart and save it, with a starter lesson, as a\n"
+    "                    new case in the content root (then built in the background)\n"
     "  --device NAME     auto (a Phantom when one answers, else the mouse), mouse, sim (the\n"
     "                    simulated hand probing every site and charting it), phantom, spacemouse\n"
     "  --frames N        stop after N frames\n"
@@ -34,9 +48,12 @@ const char* const kHelp =
     "  --sextant N       start with the view of sextant N (1-6); --lingual from lingual\n"
     "  --reference       show the case's reference chart beside the trainee's\n"
     "  --msaa N          samples per pixel of the 3D view (default 4; 0 on a software renderer)\n"
+    "  --telemetry-queue N  ticks the UI's telemetry queue holds (default 8192, 65536 with a\n"
+    "                    lesson); small values make it drop samples, for tests\n"
     "\n"
     "Exit 0 on a clean run, 1 when a picture or report could not be written or a non-finite force\n"
-    "was sent, 2 on bad arguments, a case that does not load, no display or no device.\n";
+    "was sent or the recording could not be completed, 2 on bad arguments, a case or lesson that\n"
+    "does not load, no display or no device.\n";
 
 [[noreturn]] void usage(const std::string& what) {
     std::fprintf(stderr, "sulcus: %s\n", what.c_str());
@@ -114,12 +131,32 @@ int main(int argc, char** argv) {
             o.msaa = int(number(a, value(), 0, 16));
         } else if (a == "--reference") {
             o.reference = true;
+        } else if (a == "--lesson") {
+            o.lesson = value();
+        } else if (a == "--content-root") {
+            o.content_root = value();
+        } else if (a == "--record") {
+            o.record = value();
+            if (o.record.empty()) usage("--record: give a file, or none");
+        } else if (a == "--instructor") {
+            o.instructor = true;
+        } else if (a == "--telemetry-queue") {
+            o.telemetry_queue = std::size_t(number(a, value(), 16, 1 << 20));
         } else {
             usage("unknown argument '" + a + "' (--help lists them)");
         }
     }
     if ((!o.screenshot.empty() || !o.ids.empty()) && o.frames <= 0 && o.seconds <= 0.0 && o.ticks == 0)
         usage("--screenshot and --ids need --frames N, --seconds S or --ticks N (which frame to write)");
+    if (!o.content_root.empty() && o.lesson.empty() && !o.instructor)
+        usage("--content-root goes with --lesson or --instructor");
+    if (o.case_dir.empty() && o.lesson.empty() && !o.instructor) {
+        // The bundled lesson when the content is there, else the bundled case alone.
+        namespace fs = std::filesystem;
+        const fs::path lesson = fs::path(sulcus::default_content_root()) / "lessons" / "healthy_11.json";
+        std::error_code ec;
+        if (fs::is_regular_file(lesson, ec)) o.lesson = lesson.string();
+    }
     if (o.case_dir.empty()) o.case_dir = default_case();
     sulcus::desktop::App app(o);
     return app.run();

@@ -1,5 +1,6 @@
 // The app's panels (Dear ImGui): lesson, periodontal chart, force, device, settings and the
-// magnified pocket. They read the App's state and change only UiState, the chart and the view.
+// magnified pocket. They read the App's state and change only UiState, the chart (through posted
+// events) and the view. The running lesson's panel and instructor mode are in lesson_ui.cpp.
 #include "desktop/app.h"
 
 #include "sulcus/content/tooth.h"
@@ -68,14 +69,18 @@ void App::panel_lesson() {
         ImGui::End();
         return;
     }
-    ImGui::Text("Case: %s", case_name_.c_str());
-    ImGui::TextWrapped("Chart six sites on every tooth. Slide the probe into the sulcus parallel to the long axis, "
-                       "walk it along the pocket floor at 0.20-0.25 N, read the marking at the gingival margin and "
-                       "press Space to chart the depth.");
-    const int done = chart_ ? chart_->sites_charted() : 0, total = chart_ ? chart_->sites_total() : 0;
-    char label[64];
-    std::snprintf(label, sizeof label, "%d / %d sites charted", done, total);
-    ImGui::ProgressBar(total ? float(done) / float(total) : 0.0f, ImVec2(-1, 0), label);
+    if (lesson_ && lesson_->runtime) {
+        panel_lesson_steps();
+    } else {
+        ImGui::Text("Case: %s", case_name_.c_str());
+        ImGui::TextWrapped("Chart six sites on every tooth. Slide the probe into the sulcus parallel to the long axis, "
+                           "walk it along the pocket floor at 0.20-0.25 N, read the marking at the gingival margin and "
+                           "press Space to chart the depth.");
+        const int done = chart_ ? chart_->sites_charted() : 0, total = chart_ ? chart_->sites_total() : 0;
+        char label[64];
+        std::snprintf(label, sizeof label, "%d / %d sites charted", done, total);
+        ImGui::ProgressBar(total ? float(done) / float(total) : 0.0f, ImVec2(-1, 0), label);
+    }
     ImGui::Separator();
 
     const double force = live_.has_snapshot ? glm::length(live_.snapshot.rendered_force_N) : 0.0;
@@ -109,6 +114,10 @@ void App::panel_lesson() {
 }
 
 void App::panel_chart() {
+    if (instructor_) {
+        panel_instructor();
+        return;
+    }
     if (!ImGui::Begin("Periodontal chart") || !chart_) {
         ImGui::End();
         return;
@@ -211,12 +220,13 @@ void App::panel_chart() {
         int gm = int(std::lround(chart_->gm_mm(fdi, site)));
         bool bop = chart_->bop(fdi, site);
         ImGui::SetNextItemWidth(110);
-        if (ImGui::InputInt("PD mm", &pd)) chart_->record_depth(fdi, site, std::clamp(pd, 0, 15) * 1e-3);
+        // Each entry is posted to the servo loop (recorded, and read by a running lesson).
+        if (ImGui::InputInt("PD mm", &pd)) chart_depth(fdi, site, std::clamp(pd, 0, 15));
         ImGui::SameLine();
         ImGui::SetNextItemWidth(110);
-        if (ImGui::InputInt("GM mm", &gm)) chart_->set_gm(fdi, site, std::clamp(gm, -12, 8));
+        if (ImGui::InputInt("GM mm", &gm)) chart_gm(fdi, site, std::clamp(gm, -12, 8));
         ImGui::SameLine();
-        if (ImGui::Checkbox("BOP", &bop)) chart_->set_bop(fdi, site, bop);
+        if (ImGui::Checkbox("BOP", &bop)) chart_bop(fdi, site, bop);
         if (const std::optional<double> cal = chart_->cal_mm(fdi, site)) ImGui::Text("CAL %.0f mm (PD - GM)", *cal);
     }
     ImGui::End();
