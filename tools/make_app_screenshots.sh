@@ -24,3 +24,7 @@ run --case "$build/cases/quadrant_44_47" --device sim --ticks 42600 --size 1600x
 # plot shows the three buccal sites' probing.
 run --case "$build/cases/healthy_11" --device sim --ticks 3600 --size 1600x900 --gingiva 0.4 \
     --msaa 4 --screenshot "$out/app_force.png"
+# The periodontitis 36 lesson with the simulated hand, at the floor of the lingual pocket (pass
+# 36 L holds 10.7 - 11.0 s): the lesson panel's step, sites and feedback.
+run --lesson content/assets/lessons/periodontitis_36.json --device sim --record none --ticks 10900 \
+    --size 1600x900 --gingiva 0.4 --msaa 4 --screenshot "$out/app_lesson.png"

@@ -352,6 +352,17 @@ void App::drain_telemetry() {
 // The passes come in time order (case.json), so the next one to chart is an index.
 void App::chart_pass(const ServoSnapshot& s, const ProbeReading& r) {
     if (!chart_) return;
+    // The hand's trainee reads an instruction-only step and presses Next once, as the headless
+    // recorder's does.
+    if (lesson_ && lesson_->runtime) {
+        const int step = lesson_->runtime->current_step();
+        const std::vector<LessonStep>& steps = lesson_->load.lesson.steps;
+        if (step < static_cast<int>(steps.size()) && step != acknowledged_step_ &&
+            steps[static_cast<std::size_t>(step)].complete == StepCondition::Acknowledged) {
+            acknowledged_step_ = step;
+            post(kEventLessonNext, "{}");
+        }
+    }
     // The hand's script runs on ticks (one dt each), not on the wall clock.
     const double t = scene_.scene.trajectory.front().t + double(s.tick) / servo_config_.rate_hz;
     for (; next_pass_ < manifest_.passes.size(); ++next_pass_) {

@@ -191,7 +191,8 @@ private:
     ProbeReading reading_;
     std::optional<ChartSession> chart_;
     std::vector<double> probed_at_;  // per site: servo time it was first probed (< 0: not yet)
-    size_t next_pass_ = 0;  // simulated hand: the first of the trajectory's passes not yet charted
+    size_t next_pass_ = 0;
+    int acknowledged_step_ = -1;  // simulated hand: the last instruction-only step it moved on from  // simulated hand: the first of the trajectory's passes not yet charted
     std::vector<std::string> feedback_;
     double max_force_N_ = 0.0;
     double haptic_travel_m_ = 0.0;  // furthest the haptic tool went from its start
