@@ -5,6 +5,8 @@
 #include "sulcus/engine/mesh.h"
 #include "sulcus/haptics/recording.h"
 
+#include "cli_run.h"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -18,33 +20,11 @@
 
 using namespace sulcus;
 namespace fs = std::filesystem;
+using test::kCli;
+using test::Outcome;
+using test::run_cli;
 
 namespace {
-
-const std::string kCli = std::string(SULCUS_BINARY_DIR) + "/bin/sulcus-cli";
-
-struct Outcome {
-    int status = -1;
-    std::string out, err;
-};
-
-Outcome run_cli(const std::string& args, const fs::path& dir) {
-    const std::string err_file = (dir / "stderr.txt").string();
-    const std::string cmd = kCli + " " + args + " 2>" + err_file;
-    Outcome o;
-    FILE* p = popen(cmd.c_str(), "r");
-    if (!p) return o;
-    std::array<char, 4096> buf{};
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) o.out.append(buf.data(), n);
-    const int st = pclose(p);
-    o.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    std::ifstream e(err_file);
-    std::stringstream ss;
-    ss << e.rdbuf();
-    o.err = ss.str();
-    return o;
-}
 
 void write_text(const fs::path& p, const std::string& s) {
     std::ofstream f(p);

@@ -4,49 +4,26 @@
 #include "sulcus/app/lesson_session.h"
 #include "sulcus/haptics/recording.h"
 
+#include "cli_run.h"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <sstream>
-#include <sys/wait.h>
 
 using namespace sulcus;
 namespace fs = std::filesystem;
+using test::Outcome;
+using test::run_cli;
 
 namespace {
 
-const std::string kCli = std::string(SULCUS_BINARY_DIR) + "/bin/sulcus-cli";
 const std::string kAssets = std::string(SULCUS_SOURCE_DIR) + "/content/assets";
 const std::string kRecordings = kAssets + "/recordings";
 const std::string kCases = std::string(SULCUS_BINARY_DIR) + "/cases";
-
-struct Outcome {
-    int status = -1;
-    std::string out, err;
-};
-
-Outcome run_cli(const std::string& args, const fs::path& dir) {
-    const std::string err_file = (dir / "stderr.txt").string();
-    const std::string cmd = kCli + " " + args + " 2>" + err_file;
-    Outcome o;
-    FILE* p = popen(cmd.c_str(), "r");
-    if (!p) return o;
-    std::array<char, 4096> buf{};
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) o.out.append(buf.data(), n);
-    const int st = pclose(p);
-    o.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    std::ifstream e(err_file);
-    std::stringstream ss;
-    ss << e.rdbuf();
-    o.err = ss.str();
-    return o;
-}
 
 std::string read_file(const fs::path& p) {
     std::ifstream f(p, std::ios::binary);

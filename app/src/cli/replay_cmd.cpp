@@ -1,6 +1,7 @@
 // sulcus-cli replay: recorded lessons replayed headless, scored, checked, reported.
 #include "cli/commands.h"
 #include "sulcus/app/lesson_session.h"
+#include "sulcus/app/text.h"
 
 #include <algorithm>
 #include <atomic>
@@ -54,21 +55,6 @@ struct Job {
     std::string write_error;
     double seconds = 0.0;
 };
-
-std::string xml_escape(const std::string& s) {
-    std::string o;
-    for (char c : s) {
-        switch (c) {
-            case '&': o += "&amp;"; break;
-            case '<': o += "&lt;"; break;
-            case '>': o += "&gt;"; break;
-            case '"': o += "&quot;"; break;
-            case '\'': o += "&apos;"; break;
-            default: o += (static_cast<unsigned char>(c) < 0x20 && c != '\n' && c != '\t') ? ' ' : c;
-        }
-    }
-    return o;
-}
 
 std::string write_report(const LessonOutcome& o, const std::string& path) {
     const std::string ext = fs::path(path).extension().string();

@@ -80,7 +80,6 @@ struct LiveLesson {
     std::unique_ptr<LessonRuntime> runtime;
     std::deque<std::pair<std::string, std::string>> posted;  // posted, not yet fed to the runtime
     uint64_t fed = 0;          // events fed to the runtime (== the loop's events_taken after them)
-    uint64_t posted_total = 0; // events posted and accepted by the loop
     std::optional<LessonScores> scores;  // once the lesson has ended
     bool scores_replayed = false;        // computed by replaying the recording (telemetry dropped)
 };

@@ -123,7 +123,6 @@ bool App::post(const std::string& kind, const std::string& json) {
     }
     if (lesson_) {
         lesson_->posted.emplace_back(kind, json);
-        ++lesson_->posted_total;
     }
     return true;
 }
@@ -176,7 +175,7 @@ int App::finish_session() {
         if (post(kEventLessonEnd, "{}")) {
             for (int k = 0; k < 200; ++k) {
                 ServoSnapshot s;
-                if (loop_.latest(s) && s.events_taken >= lesson_->posted_total) break;
+                if (loop_.latest(s) && s.events_taken >= lesson_->fed + lesson_->posted.size()) break;
                 std::this_thread::sleep_for(std::chrono::milliseconds(1));
             }
         }

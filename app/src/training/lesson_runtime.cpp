@@ -1,5 +1,6 @@
 // The lesson runtime: steps, rules and per-site measurements from servo snapshots and UI events.
 #include "sulcus/app/lesson_runtime.h"
+#include "sulcus/app/text.h"
 
 #include <nlohmann/json.hpp>
 
@@ -13,15 +14,10 @@ namespace sulcus {
 namespace {
 
 bool is_interproximal(Site s) { return s != Site::B && s != Site::L; }
-bool is_lingual(Site s) { return s == Site::ML || s == Site::L || s == Site::DL; }
-
-std::string fmt(const char* format, double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, format, v);
-    return buf;
-}
 
 }  // namespace
+
+bool is_lingual_site(Site s) { return s == Site::ML || s == Site::L || s == Site::DL; }
 
 std::string chart_depth_event(const SiteRef& site, double pd_mm) {
     nlohmann::json j;
@@ -116,7 +112,7 @@ void LessonRuntime::note(FeedbackLevel level, const std::string& source, const s
 int LessonRuntime::withdrawals(int fdi, bool lingual) const {
     int n = 0;
     for (const SiteMeasure& m : measures_)
-        if (m.ref.fdi == fdi && is_lingual(m.ref.site) == lingual) n += m.withdrawals;
+        if (m.ref.fdi == fdi && is_lingual_site(m.ref.site) == lingual) n += m.withdrawals;
     return n;
 }
 
@@ -169,7 +165,7 @@ void LessonRuntime::advance_steps() {
         }
         p.completed = true;
         p.end_s = last_s_;
-        note(FeedbackLevel::Step, st.id, "Step " + std::to_string(current_ + 1) + " done in " + fmt("%.1f", p.end_s - p.start_s) + " s");
+        note(FeedbackLevel::Step, st.id, "Step " + std::to_string(current_ + 1) + " done in " + format_text("%.1f", p.end_s - p.start_s) + " s");
         ++current_;
     }
     if (current_ >= n && ticks_ > 0 && !ended_ && n > 0 && progress_.back().completed && end_note_ == false) {
@@ -281,7 +277,7 @@ void LessonRuntime::on_tick(const ServoSnapshot& s) {
                 const LessonStep& st = lesson_.steps[static_cast<std::size_t>(current_)];
                 const StepProgress& p = progress_[static_cast<std::size_t>(current_)];
                 for (std::size_t k = 0; k < st.sites.size(); ++k)
-                    if (!p.satisfied[k] && st.sites[k].fdi == m.ref.fdi && is_lingual(st.sites[k].site) == is_lingual(m.ref.site))
+                    if (!p.satisfied[k] && st.sites[k].fdi == m.ref.fdi && is_lingual_site(st.sites[k].site) == is_lingual_site(m.ref.site))
                         stroke_under_way = true;
             }
             for (std::size_t r = 0; r < lesson_.rules.size(); ++r) {
@@ -335,7 +331,7 @@ void LessonRuntime::on_tick(const ServoSnapshot& s) {
             rule_last_s_[r] = s.time_s;
             std::string where = reading_site_ >= 0 ? " at " + site_ref_name(measures_[static_cast<std::size_t>(reading_site_)].ref) : "";
             note(rule.level == RuleLevel::Warning ? FeedbackLevel::Warning : FeedbackLevel::Note, rule.id,
-                 rule.message + " (" + fmt("%.3f", f) + " N" + where + ")");
+                 rule.message + " (" + format_text("%.3f", f) + " N" + where + ")");
         }
         rule_active_[r] = above;
     }

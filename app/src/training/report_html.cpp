@@ -2,9 +2,9 @@
 // against trainee), per-site scores, force over time, and the feedback the trainee was given.
 #include "sulcus/app/lesson_session.h"
 #include "sulcus/app/svg_plot.h"
+#include "sulcus/app/text.h"
 
 #include <cmath>
-#include <cstdarg>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -12,30 +12,6 @@
 namespace sulcus {
 
 namespace {
-
-std::string esc(const std::string& s) {
-    std::string o;
-    for (char c : s) {
-        switch (c) {
-            case '&': o += "&amp;"; break;
-            case '<': o += "&lt;"; break;
-            case '>': o += "&gt;"; break;
-            case '"': o += "&quot;"; break;
-            default: o += c;
-        }
-    }
-    return o;
-}
-
-std::string f(const char* format, ...) __attribute__((format(printf, 1, 2)));
-std::string f(const char* format, ...) {
-    char buf[256];
-    va_list a;
-    va_start(a, format);
-    std::vsnprintf(buf, sizeof buf, format, a);
-    va_end(a);
-    return buf;
-}
 
 // A value for "%.1f" without "-0.0" for a small negative one.
 double tenth(double v) { return std::fabs(v) < 0.05 ? 0.0 : v; }
@@ -84,10 +60,10 @@ std::string chart_table(const LessonOutcome& o) {
                 h += std::string("<td>") + site_name(s) + "</td>";
                 const auto& rec = tooth.sites[static_cast<std::size_t>(s)];
                 const SiteScore* sc = find_site(o.scores, fdi, s);
-                ref += "<span style='display:inline-block;width:34px'>" + (rec ? f("%g", rec->pd_mm) : std::string("-")) + "</span>";
+                ref += "<span style='display:inline-block;width:34px'>" + (rec ? format_text("%g", rec->pd_mm) : std::string("-")) + "</span>";
                 std::string cell = "-", cls = "c-none";
                 if (sc && sc->charted_pd_mm) {
-                    cell = f("%g", *sc->charted_pd_mm);
+                    cell = format_text("%g", *sc->charted_pd_mm);
                     cls = depth_class(*sc);
                 }
                 got += "<span class='" + cls + "' style='display:inline-block;width:34px'>" + cell + "</span>";
@@ -110,7 +86,7 @@ std::string force_plot(const LessonOutcome& o, const Rubric& rb) {
     fig.width_px = 1060;
     fig.panel_height_px = 300;
     PlotPanel p;
-    p.title = "Force on the tissue (highest in each " + f("%g", o.force.bin_s * 1e3) + " ms)";
+    p.title = "Force on the tissue (highest in each " + format_text("%g", o.force.bin_s * 1e3) + " ms)";
     p.x_label = "time (s)";
     p.y_label = "force (N)";
     PlotSeries force{"force", {}, {}, "#1f5fae"};
@@ -120,7 +96,7 @@ std::string force_plot(const LessonOutcome& o, const Rubric& rb) {
     }
     const double t_end = double(o.force.max_N.size()) * o.force.bin_s;
     auto level = [&](const std::string& name, double v, const char* colour) {
-        return PlotSeries{name + f(" %.2f N", v), {0.0, t_end}, {v, v}, colour};
+        return PlotSeries{name + format_text(" %.2f N", v), {0.0, t_end}, {v, v}, colour};
     };
     p.series.push_back(force);
     p.series.push_back(level("target from", rb.force_target_min_N, "#2e9d4f"));
@@ -135,15 +111,15 @@ std::string force_plot(const LessonOutcome& o, const Rubric& rb) {
 std::string report_html(const LessonOutcome& o) {
     const LessonScores& s = o.scores;
     const Rubric& rb = o.lesson.rubric;
-    std::string h = "<!DOCTYPE html>\n<html lang=en><head><meta charset=utf-8><title>" + esc(o.lesson.title) +
+    std::string h = "<!DOCTYPE html>\n<html lang=en><head><meta charset=utf-8><title>" + xml_escape(o.lesson.title) +
                     " - session report</title><style>" + css() + "</style></head><body>\n";
-    h += "<h1>" + esc(o.lesson.title) + "</h1>\n";
-    h += "<div class=sub>Case " + esc(std::filesystem::path(o.case_dir).filename().string()) + " &middot; device " +
-         esc(o.metadata.device) + " &middot; recorded " + esc(o.metadata.start_time) + " &middot; " +
-         std::to_string(o.ticks) + " ticks at " + f("%g", o.metadata.rate_hz) + " Hz &middot; " +
-         f("%.1f", s.time_s) + " s</div>\n";
-    h += std::string("<div class='verdict ") + (s.passed ? "pass" : "fail") + "'>" + f("Score %.0f %%", s.overall * 100.0) +
-         (s.passed ? " &mdash; passed" : " &mdash; not passed") + f(" (pass at %.0f %%)", rb.pass_score * 100.0) + "</div>\n";
+    h += "<h1>" + xml_escape(o.lesson.title) + "</h1>\n";
+    h += "<div class=sub>Case " + xml_escape(std::filesystem::path(o.case_dir).filename().string()) + " &middot; device " +
+         xml_escape(o.metadata.device) + " &middot; recorded " + xml_escape(o.metadata.start_time) + " &middot; " +
+         std::to_string(o.ticks) + " ticks at " + format_text("%g", o.metadata.rate_hz) + " Hz &middot; " +
+         format_text("%.1f", s.time_s) + " s</div>\n";
+    h += std::string("<div class='verdict ") + (s.passed ? "pass" : "fail") + "'>" + format_text("Score %.0f %%", s.overall * 100.0) +
+         (s.passed ? " &mdash; passed" : " &mdash; not passed") + format_text(" (pass at %.0f %%)", rb.pass_score * 100.0) + "</div>\n";
     h += "<div class=sub>Replay: " + std::string(o.first_mismatch < 0 ? "every force as recorded" : "forces differ from tick " + std::to_string(o.first_mismatch)) +
          (o.stored_scores ? (first_json_difference(*o.stored_scores, o.scores_json).empty() ? "; scores as stored" : "; scores differ from the stored ones")
                           : "; no stored scores") +
@@ -151,10 +127,10 @@ std::string report_html(const LessonOutcome& o) {
 
     h += "<h2>Rubric</h2>\n<table><tr><th class=l>row</th><th>score</th><th></th><th>weight</th><th>result</th><th class=l>feedback</th></tr>\n";
     for (const RowScore& r : s.rows) {
-        h += "<tr><td class=l><b>" + esc(r.name) + "</b></td><td>" + f("%.0f %%", r.score * 100.0) +
-             "</td><td><span class=bar><i style='width:" + f("%.0f", std::round(r.score * 120.0)) + "px'></i></span></td><td>" +
-             (r.weight > 0 ? f("%.2f", r.weight) : std::string("&ndash;")) + "</td><td class=" + (r.passed ? "ok>pass" : "no>not yet") +
-             "</td><td class=l>" + esc(r.feedback) + "</td></tr>\n";
+        h += "<tr><td class=l><b>" + xml_escape(r.name) + "</b></td><td>" + format_text("%.0f %%", r.score * 100.0) +
+             "</td><td><span class=bar><i style='width:" + format_text("%.0f", std::round(r.score * 120.0)) + "px'></i></span></td><td>" +
+             (r.weight > 0 ? format_text("%.2f", r.weight) : std::string("&ndash;")) + "</td><td class=" + (r.passed ? "ok>pass" : "no>not yet") +
+             "</td><td class=l>" + xml_escape(r.feedback) + "</td></tr>\n";
     }
     h += "</table>\n";
 
@@ -164,19 +140,19 @@ std::string report_html(const LessonOutcome& o) {
          "<th>force there (N)</th><th>force</th><th>max (N)</th><th>&gt; warning (s)</th><th>angle (deg)</th><th>tilt (deg)</th>"
          "<th>angle</th><th>walked (mm)</th><th>out</th></tr>\n";
     for (const SiteScore& x : s.sites) {
-        h += "<tr><td><b>" + site_ref_name(x.ref) + "</b></td><td>" + f("%g", x.reference_pd_mm) + "</td><td class=" +
-             depth_class(x) + ">" + (x.charted_pd_mm ? f("%g", *x.charted_pd_mm) : std::string("-")) + "</td><td>" +
+        h += "<tr><td><b>" + site_ref_name(x.ref) + "</b></td><td>" + format_text("%g", x.reference_pd_mm) + "</td><td class=" +
+             depth_class(x) + ">" + (x.charted_pd_mm ? format_text("%g", *x.charted_pd_mm) : std::string("-")) + "</td><td>" +
              depth_grade_name(x.depth) + "</td>";
         if (x.probed) {
-            h += "<td>" + f("%.2f", x.deepest_mm) + "</td><td>" + f("%.3f", x.force_N) + "</td><td class=" +
+            h += "<td>" + format_text("%.2f", x.deepest_mm) + "</td><td>" + format_text("%.3f", x.force_N) + "</td><td class=" +
                  (x.force == ForceGrade::Target ? "ok" : "no") + ">" + force_grade_name(x.force) + "</td><td>" +
-                 f("%.3f", x.max_force_N) + "</td><td>" + f("%.2f", x.time_above_warning_s) + "</td><td>" +
-                 f("%.1f", tenth(x.angle_deg)) + "</td><td>" + (x.interproximal ? f("%.1f", tenth(x.tilt_deg)) : std::string("&ndash;")) +
+                 format_text("%.3f", x.max_force_N) + "</td><td>" + format_text("%.2f", x.time_above_warning_s) + "</td><td>" +
+                 format_text("%.1f", tenth(x.angle_deg)) + "</td><td>" + (x.interproximal ? format_text("%.1f", tenth(x.tilt_deg)) : std::string("&ndash;")) +
                  "</td><td class=" + (x.angle_ok ? "ok>good" : "no>off") + "</td>";
         } else {
             h += "<td colspan=8 class=no>never probed</td>";
         }
-        h += "<td>" + f("%.2f", x.advance_mm) + "</td><td>" + std::to_string(x.withdrawals) + "</td></tr>\n";
+        h += "<td>" + format_text("%.2f", x.advance_mm) + "</td><td>" + std::to_string(x.withdrawals) + "</td></tr>\n";
     }
     h += "</table>\n";
 
@@ -184,9 +160,9 @@ std::string report_html(const LessonOutcome& o) {
 
     h += "<h2>Feedback given</h2>\n<table class=fb><tr><th>time (s)</th><th>kind</th><th class=l>from</th><th class=l>message</th></tr>\n";
     for (const Feedback& fb : o.feedback)
-        h += "<tr><td>" + f("%.2f", fb.time_s) + "</td><td class=" + feedback_level_name(fb.level) + ">" +
-             feedback_level_name(fb.level) + "</td><td class=l>" + esc(fb.source) + "</td><td class=l>" + esc(fb.message) + "</td></tr>\n";
-    h += "</table>\n<p class=small>" + esc(o.lesson_path) + " &middot; " + kReportFormat + "</p>\n</body></html>\n";
+        h += "<tr><td>" + format_text("%.2f", fb.time_s) + "</td><td class=" + feedback_level_name(fb.level) + ">" +
+             feedback_level_name(fb.level) + "</td><td class=l>" + xml_escape(fb.source) + "</td><td class=l>" + xml_escape(fb.message) + "</td></tr>\n";
+    h += "</table>\n<p class=small>" + xml_escape(o.lesson_path) + " &middot; " + kReportFormat + "</p>\n</body></html>\n";
     return h;
 }
 

@@ -1,9 +1,9 @@
 // Scoring a lesson from its rubric: arithmetic on the runtime's measurements, nothing else.
 #include "sulcus/app/scoring.h"
+#include "sulcus/app/text.h"
 
 #include <algorithm>
 #include <cmath>
-#include <cstdarg>
 #include <cstdio>
 #include <cstring>
 #include <map>
@@ -18,27 +18,15 @@ constexpr double kRadToDeg = 57.29577951308232;
 // error of exactly 0.5 or 1 mm inside its band despite binary rounding.
 constexpr double kBandSlack_mm = 1e-9;
 
-std::string printf_string(const char* format, ...) __attribute__((format(printf, 1, 2)));
-std::string printf_string(const char* format, ...) {
-    char buf[512];
-    va_list args;
-    va_start(args, format);
-    std::vsnprintf(buf, sizeof buf, format, args);
-    va_end(args);
-    return buf;
-}
-
-std::string mm_text(double mm) { return printf_string("%g mm", mm); }
+std::string mm_text(double mm) { return format_text("%g mm", mm); }
 
 // A value printed with no decimals, without "-0" for a small negative one.
 double whole(double v) { return std::fabs(v) < 0.5 ? 0.0 : v; }
 
-bool is_lingual(Site s) { return s == Site::ML || s == Site::L || s == Site::DL; }
-
 std::string join_sites(const std::vector<std::string>& names, std::size_t max_named = 6) {
     std::string out;
     for (std::size_t i = 0; i < names.size() && i < max_named; ++i) out += (i ? ", " : "") + names[i];
-    if (names.size() > max_named) out += printf_string(" and %zu more", names.size() - max_named);
+    if (names.size() > max_named) out += format_text(" and %zu more", names.size() - max_named);
     return out;
 }
 
@@ -101,14 +89,14 @@ SiteScore score_site(const SiteMeasure& m, const Rubric& rb) {
     else
         f += "not charted (reference " + mm_text(m.reference_pd_mm) + ")";
     if (m.visited) {
-        f += printf_string("; tip %.1f mm deep at %.2f N (%s)", s.deepest_mm, s.force_N, force_grade_name(s.force));
+        f += format_text("; tip %.1f mm deep at %.2f N (%s)", s.deepest_mm, s.force_N, force_grade_name(s.force));
         if (m.interproximal)
-            f += printf_string("; tilted %.0f deg toward the contact (%s)", whole(s.tilt_deg),
+            f += format_text("; tilted %.0f deg toward the contact (%s)", whole(s.tilt_deg),
                                s.angle_ok ? "good" : "tilt it under the contact");
         else
-            f += printf_string("; %.0f deg to the long axis (%s)", whole(s.angle_deg), s.angle_ok ? "good" : "keep it parallel");
-        f += printf_string("; walked %.1f mm", s.advance_mm);
-        if (m.withdrawals > 0) f += printf_string(", out of the sulcus %d time%s", m.withdrawals, m.withdrawals == 1 ? "" : "s");
+            f += format_text("; %.0f deg to the long axis (%s)", whole(s.angle_deg), s.angle_ok ? "good" : "keep it parallel");
+        f += format_text("; walked %.1f mm", s.advance_mm);
+        if (m.withdrawals > 0) f += format_text(", out of the sulcus %d time%s", m.withdrawals, m.withdrawals == 1 ? "" : "s");
     } else {
         f += "; never probed";
     }
@@ -190,7 +178,7 @@ LessonScores score_measures(const Rubric& rb, const SessionMeasures& in) {
     {
         RowScore r{"depth", mean(depth_sum, charted), charted > 0 && within >= rb.depth_pass_fraction * charted - kBandSlack_mm,
                    rb.weight_depth, ""};
-        r.feedback = printf_string("%d of %d charted sites within %g mm of the reference depth (%d within %g mm).", within,
+        r.feedback = format_text("%d of %d charted sites within %g mm of the reference depth (%d within %g mm).", within,
                                    charted, rb.depth_pass_mm, exact, rb.depth_exact_mm);
         if (worst)
             r.feedback += " Largest error: " + site_ref_name(worst->ref) + " charted " + mm_text(*worst->charted_pd_mm) +
@@ -216,7 +204,7 @@ LessonScores score_measures(const Rubric& rb, const SessionMeasures& in) {
         const bool no_trauma = out.time_at_trauma_s <= 0.0 && out.max_force_N < rb.force_trauma_N;
         RowScore r{"force", mean(force_sum, probed), probed > 0 && no_trauma && out.time_above_warning_s <= rb.max_time_above_warning_s,
                    rb.weight_force, ""};
-        r.feedback = printf_string(
+        r.feedback = format_text(
             "At the pocket floor: %d of %d sites at %.2f-%.2f N, %d light, %d too firm, %d at %.2f N or more. "
             "%.1f s above %.2f N (%.1f s allowed), %.1f s at %.2f N or more; highest %.2f N.",
             target, probed, rb.force_target_min_N, rb.force_target_max_N, light, firm, trauma, rb.force_trauma_N,
@@ -237,7 +225,7 @@ LessonScores score_measures(const Rubric& rb, const SessionMeasures& in) {
         const double score = mean(direct_ok + inter_ok, direct + inter);
         RowScore r{"angulation", score, direct + inter > 0 && score >= rb.angle_pass_fraction - kBandSlack_mm,
                    rb.weight_angulation, ""};
-        r.feedback = printf_string(
+        r.feedback = format_text(
             "Parallel to the long axis (within %g deg) at %d of %d direct sites; tilted %g-%g deg under the contact at "
             "%d of %d interproximal sites.",
             rb.angle_direct_max_deg, direct_ok, direct, rb.angle_interproximal_min_deg, rb.angle_interproximal_max_deg,
@@ -256,7 +244,7 @@ LessonScores score_measures(const Rubric& rb, const SessionMeasures& in) {
         const int n = out.sites_target;
         RowScore r{"walking", mean(walk_sum, n), n > 0 && walked >= rb.walk_pass_fraction * n - kBandSlack_mm,
                    rb.weight_walking, ""};
-        r.feedback = printf_string(
+        r.feedback = format_text(
             "The tip walked %g mm or more along the sulcus at %d of %d sites. Walk it in 1 mm steps with short "
             "up-and-down strokes.",
             rb.walk_advance_mm, walked, n);
@@ -266,7 +254,7 @@ LessonScores score_measures(const Rubric& rb, const SessionMeasures& in) {
     // Withdrawals, per side of each tooth with target sites.
     {
         std::map<std::pair<int, bool>, int> sides;  // (fdi, lingual) -> withdrawals
-        for (const SiteScore& s : out.sites) sides[{s.ref.fdi, is_lingual(s.ref.site)}] += s.withdrawals;
+        for (const SiteScore& s : out.sites) sides[{s.ref.fdi, is_lingual_site(s.ref.site)}] += s.withdrawals;
         int total = 0, extra = 0;
         for (const auto& [side, n] : sides) {
             total += n;
@@ -275,7 +263,7 @@ LessonScores score_measures(const Rubric& rb, const SessionMeasures& in) {
         const int n = out.sites_target;
         RowScore r{"withdrawals", n > 0 ? std::max(0.0, 1.0 - double(extra) / n) : 0.0, n > 0 && extra == 0,
                    rb.weight_withdrawals, ""};
-        r.feedback = printf_string(
+        r.feedback = format_text(
             "%d withdrawal%s from the sulcus, %d more than the %d allowed per side of a tooth. Stay in the sulcus "
             "between strokes.",
             total, total == 1 ? "" : "s", extra, rb.max_withdrawals_per_side);
@@ -288,7 +276,7 @@ LessonScores score_measures(const Rubric& rb, const SessionMeasures& in) {
         const double score = mean(charted, n);
         RowScore r{"completeness", score, n > 0 && score >= rb.completeness_pass_fraction - kBandSlack_mm,
                    rb.weight_completeness, ""};
-        r.feedback = printf_string("Charted %d of %d sites; %d of %d steps done.", charted, n, out.steps_completed,
+        r.feedback = format_text("Charted %d of %d sites; %d of %d steps done.", charted, n, out.steps_completed,
                                    out.steps_total);
         if (!missing.empty()) r.feedback += " Missing: " + join_sites(missing) + ".";
         out.rows.push_back(r);
@@ -299,8 +287,8 @@ LessonScores score_measures(const Rubric& rb, const SessionMeasures& in) {
         const double limit = rb.time_limit_s;
         RowScore r{"time", limit > 0.0 ? (out.time_s <= limit ? 1.0 : limit / out.time_s) : 1.0,
                    limit <= 0.0 || out.time_s <= limit, limit > 0.0 ? rb.weight_time : 0.0, ""};
-        r.feedback = limit > 0.0 ? printf_string("Took %.0f s (limit %.0f s).", out.time_s, limit)
-                                 : printf_string("Took %.0f s (no limit).", out.time_s);
+        r.feedback = limit > 0.0 ? format_text("Took %.0f s (limit %.0f s).", out.time_s, limit)
+                                 : format_text("Took %.0f s (no limit).", out.time_s);
         out.rows.push_back(r);
     }
 

@@ -1,5 +1,6 @@
 // SVG line plots written by hand: a few hundred lines instead of a plotting dependency.
 #include "sulcus/app/svg_plot.h"
+#include "sulcus/app/text.h"
 #include "sulcus/app/write_file.h"
 
 #include <algorithm>
@@ -28,25 +29,6 @@ constexpr double kFigureTitle = 34.0;
 constexpr double kPanelTop = 34.0;      // panel title above the plot area
 constexpr double kPanelBottom = 50.0;   // x tick labels and x axis label below it
 constexpr double kLegendRow = 18.0;
-
-std::string xml_escape(std::string_view s) {
-    std::string out;
-    out.reserve(s.size());
-    for (const char c : s) {
-        switch (c) {
-            case '&': out += "&amp;"; break;
-            case '<': out += "&lt;"; break;
-            case '>': out += "&gt;"; break;
-            case '"': out += "&quot;"; break;
-            case '\'': out += "&apos;"; break;
-            default:
-                // Control characters are not allowed in XML 1.0 text.
-                if (static_cast<unsigned char>(c) >= 0x20 || c == '\t') out += c;
-                else out += ' ';
-        }
-    }
-    return out;
-}
 
 std::string px(double v) {
     char buf[32];

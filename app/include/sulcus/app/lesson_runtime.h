@@ -33,6 +33,9 @@ inline constexpr const char* kEventChartClear = "chart.clear";  // {"site":"36MB
 inline constexpr const char* kEventLessonNext = "lesson.next";  // {} the trainee moves on
 inline constexpr const char* kEventLessonEnd = "lesson.end";    // {} the trainee ends the lesson
 
+// Sides of a tooth: ML, L, DL are lingual (palatal on upper teeth), the others facial.
+bool is_lingual_site(Site s);
+
 // Builds the JSON payload of a chart.depth event (whole or half millimetres as charted).
 std::string chart_depth_event(const SiteRef& site, double pd_mm);
 std::string chart_bop_event(const SiteRef& site, bool bop);
