@@ -30,6 +30,14 @@ CcdResult conservative_advancement(const Model& model, const Pose& base, const d
         // lower bound that reaches it is as good as the exact distance.
         const double enough = clearance + speed * (1.0 - tau);
         for (int i = 0; i < near_count; ++i) {
+            // The triangle's distance bound at the start, less how far any point has moved since:
+            // when that already reaches what this advance needs, the exact distance is not.
+            const double bound = near[i].lower_m - speed * tau;
+            if (bound >= std::min(d, enough)) {
+                d = std::min(d, bound);
+                continue;
+            }
+            ++r.tests;
             const ModelObject& obj = model.objects[near[i].object];
             const auto& t = obj.mesh.triangles[near[i].tri];
             const size_t k = near[i].piece;

@@ -7,6 +7,8 @@
 
 #include "sulcus/engine/renderer.h"
 
+#include <limits>
+
 namespace sulcus {
 
 // An object triangle within reach of one piece of the tool (a triangle near two pieces is listed
@@ -15,6 +17,13 @@ struct NearTriangle {
     uint16_t object;
     uint32_t tri;
     uint8_t piece = 0;
+    // A lower bound on the distance between the piece and the triangle at the pose the list was
+    // made for (from the piece's bounding capsules; -infinity when it has none).
+    double lower_m = -1e300;
+    // The separating-axis separation of the piece and the triangle at that pose, once the step
+    // has needed it (NaN before): along a fixed axis no point moving by d changes it by more than
+    // d, so it bounds the separation at any nearby pose.
+    double separation_m = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct CcdScratch {
@@ -29,6 +38,7 @@ struct CcdResult {
     bool hit = false;   // the tool comes within `clearance` of a triangle
     double toi = 1.0;   // motion parameter of the first such pose (1 when none)
     int iterations = 0;
+    int tests = 0;      // triangle tests made
     bool exhausted = false;  // iteration cap reached before a verdict (treated as a hit)
 };
 

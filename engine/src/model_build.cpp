@@ -138,6 +138,7 @@ std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
         tool.mesh.vertices.push_back(v);
         tool.vertex_piece.push_back(uint8_t(index));
         tool.radius_m = std::max(tool.radius_m, glm::length(v));
+        piece.radius_m = std::max(piece.radius_m, glm::length(v));
     }
     for (const auto& t : mesh.triangles) {
         tool.piece_triangles.push_back(t);

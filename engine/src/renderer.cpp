@@ -172,6 +172,7 @@ struct Workspace {
     Vec3 capsule[kMaxToolPieces * (kToolCapsules + 1)];  // the pieces' bounding capsules at that pose
     NearTri near[kMaxNear];
     int near_count = 0;
+    int tests = 0;  // triangle tests of this tick (StepStats::triangles_tested)
     FeatureKey feats[kMaxFeatures];
     int feat_count = 0;
     Inside inside[kMaxFeatures];
@@ -227,26 +228,94 @@ void set_tool_planes(const Model& model, const Quat& q, const Vec3& p, Workspace
     w.face_q = q;
 }
 
-// detect: triangles whose boxes meet a piece's box inflated by `reach`, per piece (a long bent
-// probe's own box would hold much of the scene). False on overflow.
-bool gather_near(const Model& model, const Vec3* tool_world, double reach, Workspace& w) {
+double box_reach(const RendererSettings& S, double tool_radius, const double lower[6], const double upper[6]);
+
+// A lower bound on the distance between capsule k (axis p0-p1, radius r) and triangle (a, b, e):
+// the triangle's bounding sphere against the capsule. Nearly exact for the small triangles of a
+// dense mesh; the exact segment distance when the sphere is wider than `exact_above`.
+double capsule_triangle_lower(const Vec3& p0, const Vec3& p1, double r, const Vec3& a, const Vec3& b, const Vec3& e,
+                              double exact_above) {
+    const Vec3 centre = (a + b + e) / 3.0;
+    const double radius = std::sqrt(
+        std::max({glm::dot(a - centre, a - centre), glm::dot(b - centre, b - centre), glm::dot(e - centre, e - centre)}));
+    const Vec3 d = p1 - p0, off = centre - p0;
+    const double dd = glm::dot(d, d);
+    const double s = dd > 0.0 ? std::clamp(glm::dot(off, d) / dd, 0.0, 1.0) : 0.0;
+    const double lower = glm::length(off - s * d) - radius - r;
+    if (radius > exact_above) return std::max(lower, segment_triangle_distance(p0, p1, a, b, e) - r);
+    return lower;
+}
+
+// detect: the triangles each piece of the tool can reach within the box [lower, upper] of the
+// step's coordinates, each with a lower bound on its distance from the piece (for the guard).
+// Against a rigid object a long piece (a probe's tip or shank) is bounded by its capsules: the BVH
+// is walked along each capsule, and a triangle is kept only when its distance bound to some
+// capsule is within how far that piece can move -- so a tilted probe does not collect the whole
+// surface inside its box, and nothing it could touch is left out. A compliant object (which the
+// tool enters) gives the triangles whose boxes meet the piece's box inflated by the tool's reach
+// `reach_all`: gather_atoms looks among them for the face that holds a tool vertex inside it. A
+// compact piece takes the triangles in its box inflated by its reach. Needs the tool's planes
+// and capsules at the same pose (set_tool_planes). False on overflow.
+bool gather_near(const Model& model, const Vec3* tool_world, const double lower[6], const double upper[6],
+                 double reach_all, Workspace& w) {
     w.near_count = 0;
     bool overflow = false;
+    auto push = [&](const NearTri& nt) {
+        if (w.near_count >= kMaxNear) {
+            overflow = true;
+            return false;
+        }
+        w.near[w.near_count++] = nt;
+        return true;
+    };
     for (size_t k = 0; k < model.tool.pieces.size(); ++k) {
         const ToolPiece& piece = model.tool.pieces[k];
+        const uint8_t pk = static_cast<uint8_t>(k);
+        // How far this piece's points can move within the box.
+        const double reach = box_reach(model.settings, piece.radius_m, lower, upper);
+        const Vec3* axis = w.capsule + k * (kToolCapsules + 1);
         Aabb box;
         for (uint32_t v = piece.vertex_begin; v < piece.vertex_begin + piece.vertex_count; ++v) box.grow(tool_world[v]);
-        box.inflate(reach);
         for (size_t o = 0; o < model.objects.size(); ++o) {
-            model.objects[o].bvh.query(box, [&](uint32_t tri) {
-                if (w.near_count >= kMaxNear) {
-                    overflow = true;
-                    return false;
-                }
-                w.near[w.near_count++] = NearTri{static_cast<uint16_t>(o), tri, static_cast<uint8_t>(k)};
-                return true;
+            const ModelObject& obj = model.objects[o];
+            const uint16_t ok = static_cast<uint16_t>(o);
+            if (obj.compliant || piece.capsule_count == 0) {
+                Aabb b = box;
+                b.inflate(obj.compliant ? reach_all : reach);
+                obj.bvh.query(b, [&](uint32_t tri) {
+                    double bound = -1e300;
+                    if (piece.capsule_count > 0) {
+                        const auto& t = obj.mesh.triangles[tri];
+                        bound = 1e300;
+                        for (int c = 0; c < piece.capsule_count; ++c)
+                            bound = std::min(bound, capsule_triangle_lower(axis[c], axis[c + 1], piece.capsule_radii_m[size_t(c)],
+                                                                           obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
+                                                                           obj.mesh.vertices[t[2]], 1e300));
+                    }
+                    return push(NearTri{ok, tri, pk, bound});
+                });
+                if (overflow) return false;
+                continue;
+            }
+            const int first = w.near_count;
+            for (int c = 0; c < piece.capsule_count; ++c) {
+                const double r = piece.capsule_radii_m[size_t(c)];
+                obj.bvh.query_capsule(axis[c], axis[c + 1], r + reach, [&](uint32_t tri) {
+                    const auto& t = obj.mesh.triangles[tri];
+                    const double bound = capsule_triangle_lower(axis[c], axis[c + 1], r, obj.mesh.vertices[t[0]],
+                                                                obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]], reach);
+                    return bound > reach || push(NearTri{ok, tri, pk, bound});
+                });
+                if (overflow) return false;
+            }
+            // A triangle near two capsules was listed twice: once, with the lesser bound.
+            std::sort(w.near + first, w.near + w.near_count, [](const NearTri& a, const NearTri& b) {
+                return a.tri < b.tri || (a.tri == b.tri && a.lower_m < b.lower_m);
             });
-            if (overflow) return false;
+            int out = first;
+            for (int i = first; i < w.near_count; ++i)
+                if (out == first || w.near[out - 1].tri != w.near[i].tri) w.near[out++] = w.near[i];
+            w.near_count = out;
         }
     }
     return true;
@@ -260,6 +329,7 @@ bool motion_is_free(const Model& model, const Pose& base, const double x[6], dou
                                                  kMaxCcdIterations, scratch);
     // The scratch planes held the moving tool; restore the start pose's planes.
     set_tool_planes(model, base.orientation, base.position, w);
+    w.tests += r.tests;
     return !r.hit;
 }
 
@@ -356,6 +426,7 @@ void gather_atoms(const Model& model, double reach, double soft, const Vec3& pus
     w.atom_count = 0;
     w.alt_count = 0;
     w.feat_count = 0;
+    w.tests += w.near_count;
     w.inside_count = 0;
     w.overt_count = 0;
     w.oedge_count = 0;
@@ -891,8 +962,11 @@ void order_rows(const Model& model, Workspace& w, const ToolPoseAt& at, const do
     int warm_count = 0;
     for (int k = 0; k < w.warm.count; ++k)
         if (w.warm.active[k] >= 0 && w.warm.active[k] < n) warm_atoms[warm_count++] = w.cand[w.warm.active[k]];
-    std::stable_sort(w.order_index, w.order_index + n,
-                     [&](int a, int b) { return w.order_value[a] < w.order_value[b]; });
+    // Ties in their order: a sort on (value, index) is the stable sort, without the buffer
+    // std::stable_sort allocates.
+    std::sort(w.order_index, w.order_index + n, [&](int a, int b) {
+        return w.order_value[a] < w.order_value[b] || (w.order_value[a] == w.order_value[b] && a < b);
+    });
     for (int i = 0; i < n; ++i) {
         w.order_atoms[i] = w.cand[w.order_index[i]];
         w.order_slots[i] = w.cand_slot[w.order_index[i]];
@@ -1014,12 +1088,32 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         // Guard: every triangle in reach must be separated from the tool at the new pose (a
         // compliant one: by no more than its zone gives way). Planes at the new pose for the
         // check, then restored to the start pose.
-        place_tool_vertices(model.tool, nx.q, nx.p, w.tool_moved);
-        set_tool_planes(model, nx.q, nx.p, w);
         int missed = 0;
         NearTri missed_tris[8];
         uint8_t missed_piece[8];
+        // No point of a piece moved further than this from the step's start: a triangle that was
+        // further than that from the piece there cannot be reached, nor can one whose separation
+        // there (along its separating axis) leaves room for that motion. The separations at the
+        // start are found once per pass, on the tool's planes there (still in place here).
+        const double shift = glm::length(nx.p - base.position), turn = glm::length(Vec3(x[3], x[4], x[5]));
+        for (int i = 0; i < w.near_count; ++i) {
+            NearTri& nt = w.near[i];
+            const double moved_by = shift + turn * model.tool.pieces[nt.piece].radius_m;
+            if (nt.lower_m > moved_by || !std::isnan(nt.separation_m)) continue;
+            ++w.tests;
+            const ModelObject& obj = model.objects[nt.object];
+            const auto& t = obj.mesh.triangles[nt.tri];
+            nt.separation_m = separate_convex_triangle(tool_view(model, nt.piece, w.tool_world, w), obj.mesh.vertices[t[0]],
+                                                       obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]).separation;
+        }
+        place_tool_vertices(model.tool, nx.q, nx.p, w.tool_moved);
+        set_tool_planes(model, nx.q, nx.p, w);
         for (int i = 0; i < w.near_count && missed < 8; ++i) {
+            const double moved_by = shift + turn * model.tool.pieces[w.near[i].piece].radius_m;
+            if (w.near[i].lower_m > moved_by) continue;
+            const double give_i = triangle_zone_depth(model, w.slacks, w.near[i]);
+            if (w.near[i].separation_m - moved_by >= -(S.constraint_tol_m + give_i)) continue;
+            ++w.tests;
             const size_t k = w.near[i].piece;
             const ConvexView moved = tool_view(model, k, w.tool_moved, w);
             const ModelObject& obj = model.objects[w.near[i].object];
@@ -1295,6 +1389,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     Workspace& w = workspace();
     const RendererSettings& S = model.settings;
     StepResult res;
+    w.tests = 0;
 
     // Input health: a non-finite or non-unit pose is refused; the last pose is kept.
     const double qn = glm::length(haptic_in.orientation);
@@ -1384,7 +1479,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                     straight_hi[j] = std::max(0.0, target_local[j]);
                 }
                 reach = box_reach(S, model.tool.radius_m, straight_lo, straight_hi);
-                if (!gather_near(model, w.tool_world, reach, w)) {
+                if (!gather_near(model, w.tool_world, straight_lo, straight_hi, reach, w)) {
                     scale *= 0.5;
                     stage_detect += micros(t0, Clock::now());
                     continue;
@@ -1402,7 +1497,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             }
             // In contact: what the force-continuity box can reach.
             reach = box_reach(S, model.tool.radius_m, rate_lower, rate_upper);
-            if (!gather_near(model, w.tool_world, reach, w)) {
+            if (!gather_near(model, w.tool_world, rate_lower, rate_upper, reach, w)) {
                 scale *= 0.5;
                 stage_detect += micros(t0, Clock::now());
                 continue;
@@ -1438,7 +1533,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             if (solved && !cc.real && !cc.virtual_only && !at_target) {
                 res.stats.released = true;
                 reach = box_reach(S, model.tool.radius_m, lower, upper);
-                if (!gather_near(model, w.tool_world, reach, w)) {
+                if (!gather_near(model, w.tool_world, lower, upper, reach, w)) {
                     solved = false;
                     scale *= 0.5;
                     continue;
@@ -1540,6 +1635,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     res.stats.times.solve_us = stage_solve;
     res.stats.times.select_us = micros(t_select, t_force);
     res.stats.times.force_us = micros(t_force, t_end);
+    res.stats.triangles_tested = w.tests;
     return res;
 }
 

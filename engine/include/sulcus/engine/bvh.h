@@ -27,6 +27,13 @@ public:
     template <class Visit>
     bool query(const Aabb& query, Visit&& visit) const;
 
+    // Calls visit(triangle_index) for the triangles that may lie within `radius` of segment
+    // p0-p1: every such triangle is visited (a box is passed over only when its bounding sphere is
+    // farther than `radius` from the segment, or its box misses the capsule's box); some farther
+    // ones may be too. Allocation-free; stops early when visit returns false.
+    template <class Visit>
+    bool query_capsule(const Vec3& p0, const Vec3& p1, double radius, Visit&& visit) const;
+
     const std::vector<Node>& nodes() const { return nodes_; }
     const std::vector<uint32_t>& order() const { return order_; }
     int depth() const { return depth_; }
@@ -40,6 +47,20 @@ private:
 
 inline constexpr int kBvhMaxDepth = 64;
 
+namespace bvh_detail {
+// Whether a box may hold points within `radius` of segment p0 + t d (t in [0, 1], dd = d . d):
+// false only when the sphere around the box is clear of that capsule.
+inline bool box_near_segment(const Aabb& b, const Vec3& p0, const Vec3& d, double dd, double radius) {
+    const Vec3 c = b.center();
+    const Vec3 h = 0.5 * (b.hi - b.lo);
+    const Vec3 w = c - p0;
+    const double t = dd > 0.0 ? glm::clamp(glm::dot(w, d) / dd, 0.0, 1.0) : 0.0;
+    const Vec3 off = w - t * d;
+    const double reach = radius + glm::length(h);
+    return glm::dot(off, off) <= reach * reach;
+}
+}  // namespace bvh_detail
+
 template <class Visit>
 bool Bvh::query(const Aabb& q, Visit&& visit) const {
     if (nodes_.empty()) return true;
@@ -52,6 +73,34 @@ bool Bvh::query(const Aabb& q, Visit&& visit) const {
         if (n.count > 0) {
             for (uint32_t i = n.first; i < n.first + n.count; ++i)
                 if (boxes_[i].overlaps(q) && !visit(order_[i])) return false;
+        } else {
+            stack[top++] = n.first + 1;
+            stack[top++] = n.first;
+        }
+    }
+    return true;
+}
+
+template <class Visit>
+bool Bvh::query_capsule(const Vec3& p0, const Vec3& p1, double radius, Visit&& visit) const {
+    if (nodes_.empty()) return true;
+    Aabb q;
+    q.grow(p0);
+    q.grow(p1);
+    q.inflate(radius);
+    const Vec3 d = p1 - p0;
+    const double dd = glm::dot(d, d);
+    uint32_t stack[kBvhMaxDepth + 2];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        const Node& n = nodes_[stack[--top]];
+        if (!n.box.overlaps(q) || !bvh_detail::box_near_segment(n.box, p0, d, dd, radius)) continue;
+        if (n.count > 0) {
+            for (uint32_t i = n.first; i < n.first + n.count; ++i)
+                if (boxes_[i].overlaps(q) && bvh_detail::box_near_segment(boxes_[i], p0, d, dd, radius) &&
+                    !visit(order_[i]))
+                    return false;
         } else {
             stack[top++] = n.first + 1;
             stack[top++] = n.first;

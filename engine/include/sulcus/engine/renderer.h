@@ -115,6 +115,10 @@ struct ToolPiece {
     // kToolCapsules for a long piece (axis over four times its widest capsule), else 0: for a
     // compact piece the bounds are loose and cost more than they save.
     int capsule_count = 0;
+    // Largest distance from the tool's origin to a vertex of this piece: a turn of theta moves
+    // no point of the piece further than radius_m * theta (a probe's tip, near the origin, far
+    // less than its handle).
+    double radius_m = 0.0;
 };
 
 // The tool: a rigid union of closed convex pieces (the connected components of its mesh, which
@@ -223,6 +227,9 @@ struct StageTimes {
 struct StepStats {
     StageTimes times;
     int triangles_near = 0;     // triangles within reach of this tick's motion (detect)
+    // (triangle, tool piece) pairs put through a primitive test this tick: gather's feature
+    // search, the solve's guard and the free-motion CCD.
+    int triangles_tested = 0;
     int atoms_gathered = 0;     // constraint atoms found within reach (gather)
     int candidates = 0;         // candidate principal-contact sets solved (gather/solve)
     int atoms = 0;              // constraint atoms in the chosen candidate
