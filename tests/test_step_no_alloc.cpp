@@ -1,10 +1,16 @@
 // The servo step allocates nothing after its first call on a thread (its scratch memory is a
 // per-thread workspace): counted by replacing the global operator new in this executable.
 #include "scene_helpers.h"
+#include "sulcus/engine/scene_file.h"
 
 #include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <new>
+#include <string>
 #include <vector>
 
 #include "allocation_counter.h"
@@ -78,4 +84,49 @@ TEST(StepAllocation, NoHeapAllocationWithPiecesCompliantZonesAndFriction) {
     }
     EXPECT_EQ(sulcus::test::heap_allocations() - before, 0);
     EXPECT_GT(soft, 1000);
+}
+
+// The bundled quadrant case (built by the build into <build>/cases/) stepped along its whole
+// probing trajectory: every site probed down to a compliant floor with friction, on the full
+// meshes. Not one heap allocation after the warm-up step.
+TEST(StepAllocation, NoHeapAllocationOverTheBundledQuadrantProbing) {
+    const std::string path = std::string(SULCUS_BINARY_DIR) + "/cases/quadrant_44_47/scene.json";
+    ASSERT_TRUE(std::filesystem::exists(path))
+        << path << " is missing: the build makes it (cmake --build <build> --target bundled_cases)";
+    const SceneLoad load = load_scene(path);
+    ASSERT_TRUE(load.ok()) << load.errors.front();
+    const SceneFile& scene = load.scene;
+    ASSERT_GE(scene.trajectory.size(), 2u);
+    ModelBuild b = build_model(scene, RendererSettings{});
+    ASSERT_TRUE(b.model) << b.error;
+
+    // Every tick's haptic pose, sampled before counting.
+    const double t0 = scene.trajectory.front().t, t1 = scene.trajectory.back().t;
+    const long n = long(std::floor((t1 - t0) * scene.rate_hz + 1e-9)) + 1;
+    std::vector<Pose> ticks;
+    ticks.reserve(size_t(n));
+    size_t cursor = 0;
+    for (long i = 0; i < n; ++i) ticks.push_back(sample_trajectory(scene.trajectory, t0 + double(i) / scene.rate_hz, cursor));
+    ASSERT_GT(ticks.size(), 30000u);
+
+    State st = make_state(ticks.front());
+    step(*b.model, st, ticks.front());  // warm-up: the workspace is made here
+    long contact = 0, soft = 0, friction = 0;
+    const auto start = std::chrono::steady_clock::now();
+    const long before = sulcus::test::heap_allocations();
+    for (const Pose& h : ticks) {
+        const StepResult r = step(*b.model, st, h);
+        contact += r.contacts > 0;
+        soft += r.stats.soft_zones > 0;
+        friction += r.stats.friction_static_limit_N > 0.0;
+    }
+    const long allocations = sulcus::test::heap_allocations() - before;
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_EQ(allocations, 0) << "over " << ticks.size() << " ticks";
+    // It really probed: long in contact, into the compliant floor, with friction.
+    EXPECT_GT(contact, 2000);
+    EXPECT_GT(soft, 0);
+    EXPECT_GT(friction, 0);
+    std::printf("%zu ticks in %.1f s: %ld in contact, %ld with soft zones, %ld with friction\n", ticks.size(), seconds,
+                contact, soft, friction);
 }

@@ -7,7 +7,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 packages=(
   cmake ninja-build g++ pkg-config
   libglm-dev libopenmesh-dev libeigen3-dev nlohmann-json3-dev libtinygltf-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libfcl-dev valgrind
   libhidapi-dev libusb-1.0-0-dev umockdev
   libglfw3-dev libimgui-dev libstb-dev
   xvfb xauth libgl1-mesa-dri xdotool binutils

@@ -32,4 +32,10 @@ int cmd_replay(const std::vector<std::string>& args);
 extern const char* const kHelpLesson;
 int cmd_lesson(const std::vector<std::string>& args);
 
+extern const char* const kHelpBench;
+int cmd_bench(const std::vector<std::string>& args);
+
+extern const char* const kHelpWpd;
+int cmd_wpd(const std::vector<std::string>& args);
+
 }  // namespace sulcus::cli

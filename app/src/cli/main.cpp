@@ -39,6 +39,9 @@ const char* kHelpMain =
     "  replay RECORDING|FOLDER... [--check] [--report FILE] [--jobs N] [--shard I/N] [--junit FILE]\n"
     "                                        replay recorded lessons headless and score them\n"
     "  lesson check|new|record ...           validate, start or record a lesson\n"
+    "  bench [SCENE...] [--json FILE] [--peer fcl]\n"
+    "                                        time the step on the fixed bench scenes\n"
+    "  wpd SCENE... --out DIR                error against run time over the accuracy settings\n"
     "  help [COMMAND]                        show help for a command\n"
     "\n"
     "exit status: 0 done; 1 ran, but a requested check failed; 2 bad input or usage;\n"
@@ -134,6 +137,14 @@ int cmd_help(const std::vector<std::string>& args) {
         std::fputs(kHelpLesson, stdout);
         return kOk;
     }
+    if (args[0] == "bench") {
+        std::fputs(kHelpBench, stdout);
+        return kOk;
+    }
+    if (args[0] == "wpd") {
+        std::fputs(kHelpWpd, stdout);
+        return kOk;
+    }
     return usage("help: unknown command '" + args[0] + "'");
 }
 
@@ -154,6 +165,8 @@ int main(int argc, char** argv) {
         if (cmd == "devices") return cmd_devices(args);
         if (cmd == "replay") return cmd_replay(args);
         if (cmd == "lesson") return cmd_lesson(args);
+        if (cmd == "bench") return cmd_bench(args);
+        if (cmd == "wpd") return cmd_wpd(args);
         if (cmd == "help" || cmd == "--help" || cmd == "-h") return cmd_help(args);
         return usage("unknown command '" + cmd + "'");
     } catch (const std::exception& e) {

@@ -71,15 +71,19 @@ Range widen(double lo, double hi, bool any) {
     return {lo - pad, hi + pad};
 }
 
-bool usable_point(double x, double y, bool log_y) {
-    return std::isfinite(x) && std::isfinite(y) && (!log_y || y > 0.0);
+bool usable_point(double x, double y, bool log_y, bool log_x = false) {
+    return std::isfinite(x) && std::isfinite(y) && (!log_y || y > 0.0) && (!log_x || x > 0.0);
 }
 
 struct Mapper {
     double x0, x1, y0, y1;  // plot area in pixels (y0 top)
-    Range xr, yr;           // data ranges (yr in log10 units on a log axis)
+    Range xr, yr;           // data ranges (in log10 units on a log axis)
     bool log_y;
-    double sx(double x) const { return x0 + (x - xr.lo) / (xr.hi - xr.lo) * (x1 - x0); }
+    bool log_x = false;
+    double sx(double x) const {
+        const double v = log_x ? std::log10(x) : x;
+        return x0 + (v - xr.lo) / (xr.hi - xr.lo) * (x1 - x0);
+    }
     double sy(double y) const {
         const double v = log_y ? std::log10(y) : y;
         return y1 - (v - yr.lo) / (yr.hi - yr.lo) * (y1 - y0);
@@ -114,7 +118,7 @@ std::string series_path(const PlotSeries& s, const Mapper& m) {
     };
 
     for (size_t i = 0; i < n; ++i) {
-        if (!usable_point(s.x[i], s.y[i], m.log_y)) {
+        if (!usable_point(s.x[i], s.y[i], m.log_y, m.log_x)) {
             flush();
             pen_down = false;
             continue;
@@ -141,17 +145,18 @@ std::string series_path(const PlotSeries& s, const Mapper& m) {
 }
 
 void render_panel(std::string& out, const PlotPanel& panel, double top, double width, double height) {
-    const bool log_y = panel.log_y;
+    const bool log_y = panel.log_y, log_x = panel.log_x;
     // Data ranges over every usable point.
     double xlo = INFINITY, xhi = -INFINITY, ylo = INFINITY, yhi = -INFINITY;
     bool any = false;
     for (const PlotSeries& s : panel.series) {
         const size_t n = std::min(s.x.size(), s.y.size());
         for (size_t i = 0; i < n; ++i) {
-            if (!usable_point(s.x[i], s.y[i], log_y)) continue;
+            if (!usable_point(s.x[i], s.y[i], log_y, log_x)) continue;
             const double y = log_y ? std::log10(s.y[i]) : s.y[i];
-            xlo = std::min(xlo, s.x[i]);
-            xhi = std::max(xhi, s.x[i]);
+            const double x = log_x ? std::log10(s.x[i]) : s.x[i];
+            xlo = std::min(xlo, x);
+            xhi = std::max(xhi, x);
             ylo = std::min(ylo, y);
             yhi = std::max(yhi, y);
             any = true;
@@ -159,11 +164,17 @@ void render_panel(std::string& out, const PlotPanel& panel, double top, double w
     }
     Mapper m;
     m.log_y = log_y;
+    m.log_x = log_x;
     m.x0 = kLeft;
     m.x1 = width - kLegendWidth - kRight;
     m.y0 = top + kPanelTop;
     m.y1 = top + height - kPanelBottom;
-    m.xr = widen(xlo, xhi, any);
+    if (log_x) {
+        m.xr = any ? Range{std::floor(xlo), std::ceil(xhi)} : Range{0.0, 1.0};
+        if (m.xr.hi <= m.xr.lo) m.xr.hi = m.xr.lo + 1.0;
+    } else {
+        m.xr = widen(xlo, xhi, any);
+    }
     if (log_y) {
         m.yr = any ? Range{std::floor(ylo), std::ceil(yhi)} : Range{0.0, 1.0};
         if (m.yr.hi <= m.yr.lo) m.yr.hi = m.yr.lo + 1.0;
@@ -179,14 +190,26 @@ void render_panel(std::string& out, const PlotPanel& panel, double top, double w
            xml_escape(panel.title) + "</text>\n";
 
     // Grid and tick labels.
-    const std::vector<double> xt = nice_ticks(m.xr.lo, m.xr.hi);
-    const double xstep = xt.size() > 1 ? xt[1] - xt[0] : 1.0;
-    for (const double v : xt) {
-        const std::string X = px(m.sx(v));
-        out += "<line x1=\"" + X + "\" y1=\"" + px(m.y0) + "\" x2=\"" + X + "\" y2=\"" + px(m.y1) +
-               "\" stroke=\"#e4e4e4\"/>\n";
-        out += "<text x=\"" + X + "\" y=\"" + px(m.y1 + 16) + "\" text-anchor=\"middle\">" +
-               xml_escape(tick_label(v, xstep)) + "</text>\n";
+    if (log_x) {
+        const int lo = static_cast<int>(m.xr.lo), hi = static_cast<int>(m.xr.hi);
+        const int every = std::max(1, (hi - lo + 7) / 8);
+        for (int e = lo; e <= hi; e += every) {
+            const std::string X = px(m.sx(std::pow(10.0, e)));
+            out += "<line x1=\"" + X + "\" y1=\"" + px(m.y0) + "\" x2=\"" + X + "\" y2=\"" + px(m.y1) +
+                   "\" stroke=\"#e4e4e4\"/>\n";
+            out += "<text x=\"" + X + "\" y=\"" + px(m.y1 + 16) + "\" text-anchor=\"middle\">" +
+                   xml_escape(decade_label(e)) + "</text>\n";
+        }
+    } else {
+        const std::vector<double> xt = nice_ticks(m.xr.lo, m.xr.hi);
+        const double xstep = xt.size() > 1 ? xt[1] - xt[0] : 1.0;
+        for (const double v : xt) {
+            const std::string X = px(m.sx(v));
+            out += "<line x1=\"" + X + "\" y1=\"" + px(m.y0) + "\" x2=\"" + X + "\" y2=\"" + px(m.y1) +
+                   "\" stroke=\"#e4e4e4\"/>\n";
+            out += "<text x=\"" + X + "\" y=\"" + px(m.y1 + 16) + "\" text-anchor=\"middle\">" +
+                   xml_escape(tick_label(v, xstep)) + "</text>\n";
+        }
     }
     if (log_y) {
         const int lo = static_cast<int>(m.yr.lo), hi = static_cast<int>(m.yr.hi);
@@ -230,6 +253,13 @@ void render_panel(std::string& out, const PlotPanel& panel, double top, double w
         if (!d.empty())
             out += "<path d=\"" + d + "\" fill=\"none\" stroke=\"" + colour +
                    "\" stroke-width=\"1.3\" stroke-linejoin=\"round\"/>\n";
+        if (s.markers) {
+            const size_t n = std::min(s.x.size(), s.y.size());
+            for (size_t i = 0; i < n; ++i)
+                if (usable_point(s.x[i], s.y[i], m.log_y, m.log_x))
+                    out += "<circle cx=\"" + px(m.sx(s.x[i])) + "\" cy=\"" + px(m.sy(s.y[i])) + "\" r=\"3\" fill=\"" +
+                           colour + "\"/>\n";
+        }
         // Legend entry.
         const double y = m.y0 + 10 + kLegendRow * static_cast<double>(k);
         const double lx = m.x1 + 14;

@@ -13,6 +13,7 @@ struct PlotSeries {
     std::vector<double> x;  // same length as y; NaN/infinite points are skipped (the line breaks)
     std::vector<double> y;
     std::string colour;     // SVG colour ("#1f77b4"); empty picks the next of a distinct palette
+    bool markers = false;   // a dot at every point (for short series such as a parameter sweep)
 };
 
 struct PlotPanel {
@@ -20,6 +21,7 @@ struct PlotPanel {
     std::string x_label;  // with unit, e.g. "time (s)"
     std::string y_label;  // with unit, e.g. "force (N)"
     bool log_y = false;   // log10 y axis; points with y <= 0 are skipped
+    bool log_x = false;   // log10 x axis; points with x <= 0 are skipped
     std::vector<PlotSeries> series;
 };
 

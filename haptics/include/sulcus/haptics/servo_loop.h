@@ -181,7 +181,7 @@ inline constexpr int kPeriodBins = 500;
 // Jitter |period - nominal| histogram: 0 .. 5 ms in 1 us bins, plus one overflow bin.
 inline constexpr int kJitterBins = 5000;
 
-struct Percentiles {
+struct PeriodPercentiles {
     double p50 = 0.0, p99 = 0.0, max = 0.0;
 };
 
@@ -190,9 +190,9 @@ struct ServoStats {
     double elapsed_s = 0.0;          // first tick's wake to last tick's wake
     double achieved_rate_hz = 0.0;   // (ticks - 1) / elapsed_s
     double nominal_rate_hz = 0.0;
-    Percentiles period_us;           // tick-to-tick wake period
-    Percentiles jitter_us;           // |period - nominal period|
-    Percentiles step_us;             // renderer step wall time (over the kept samples)
+    PeriodPercentiles period_us;        // tick-to-tick wake period
+    PeriodPercentiles jitter_us;        // |period - nominal period|
+    PeriodPercentiles step_us;          // renderer step wall time (over the kept samples)
     uint64_t deadline_misses = 0;    // ticks whose work ended after the next deadline
     uint64_t skipped_slots = 0;      // deadlines dropped to catch up after an overrun
     uint64_t read_failures = 0;      // device.read() returned false

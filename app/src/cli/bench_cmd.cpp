@@ -1,0 +1,231 @@
+// sulcus-cli bench: the step timed over the fixed bench scenes, with its stages, counters and
+// heap allocations; optionally our proximity queries against a peer library's on the same poses.
+#include "cli/bench_run.h"
+#include "cli/bench_scenes.h"
+#include "cli/commands.h"
+#include "cli/peer_fcl.h"
+#include "sulcus/app/lesson_session.h"
+#include "sulcus/app/text.h"
+#include "sulcus/engine/runner.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+namespace sulcus::cli {
+
+const char* const kHelpBench =
+    "usage: sulcus-cli bench [SCENE...] [--json FILE] [--peer fcl] [--max-ticks N] [--list]\n"
+    "                        [--content-root DIR] [--cases DIR]\n"
+    "\n"
+    "Times the servo step over a fixed, deterministic set of scenes (the paper scenes, the\n"
+    "bundled quadrant case probed at every site at full resolution, and a scripted session on it\n"
+    "with the probe in contact in two regions), one step per tick on this thread. Only the step is\n"
+    "inside the clock. Prints a table; --json writes\n"
+    "  {\"machine\", \"scenes\": [{\"name\", \"triangles\", \"steps\", \"step_time_us\": {median, p99,\n"
+    "   p999, max}, \"stages_us\": {stage: {median, p99}}, \"allocations_per_step\",\n"
+    "   \"triangles_tested_per_step\", \"candidates_per_step\", ...}]}\n"
+    "Every 10th tick with a force is checked exactly for penetration and gap (not timed).\n"
+    "\n"
+    "  SCENE            run only these (names from --list)\n"
+    "  --peer fcl       also time our proximity and collision queries against FCL's on the same\n"
+    "                   meshes and poses (graphic poses of the run), as a time ratio\n"
+    "  --max-ticks N    only the first N ticks of each scene (for profiling)\n"
+    "  --list           print the scene names and exit\n";
+
+namespace {
+
+std::string cpu_model() {
+    std::ifstream f("/proc/cpuinfo");
+    std::string line;
+    while (std::getline(f, line))
+        if (line.rfind("model name", 0) == 0) {
+            const size_t c = line.find(':');
+            if (c != std::string::npos) return line.substr(c + 2);
+        }
+    return "unknown";
+}
+
+nlohmann::json machine_json() {
+    nlohmann::json m;
+    m["cpu"] = cpu_model();
+    m["hardware_threads"] = std::thread::hardware_concurrency();
+#if defined(__clang__)
+    m["compiler"] = std::string("clang ") + __clang_version__;
+#elif defined(__GNUC__)
+    m["compiler"] = std::string("gcc ") + __VERSION__;
+#endif
+#if defined(__OPTIMIZE__)
+    m["optimized"] = true;
+#else
+    m["optimized"] = false;
+#endif
+    m["threads_used"] = 1;
+    return m;
+}
+
+nlohmann::json pct_json(const Percentiles& p, bool full) {
+    nlohmann::json j{{"median", p.median}, {"p99", p.p99}};
+    if (full) {
+        j["p999"] = p.p999;
+        j["max"] = p.max;
+    }
+    return j;
+}
+
+nlohmann::json peer_json(const std::string& scene, const PeerComparison& c) {
+    nlohmann::json j{{"scene", scene}};
+    if (!c.error.empty()) j["error"] = c.error;
+    nlohmann::json qs = nlohmann::json::array();
+    for (const PeerQueryTiming& q : c.queries)
+        qs.push_back({{"query", q.query},
+                      {"queries", q.queries},
+                      {"ours_us", pct_json(q.ours_us, true)},
+                      {"peer_us", pct_json(q.peer_us, true)},
+                      {"ratio", q.ratio},
+                      {"max_difference_m", q.max_difference_m},
+                      {"disagreements", q.disagreements}});
+    j["queries"] = qs;
+    return j;
+}
+
+}  // namespace
+
+int cmd_bench(const std::vector<std::string>& args) {
+    std::string json_path, peer, content_root, cases_dir;
+    std::vector<std::string> names;
+    long max_ticks = 0;
+    bool list = false;
+    for (size_t i = 0; i < args.size(); ++i) {
+        const std::string& a = args[i];
+        auto value = [&](const char* what) -> const std::string* {
+            if (i + 1 >= args.size()) return nullptr;
+            (void)what;
+            return &args[++i];
+        };
+        if (a == "--json" || a == "--peer" || a == "--max-ticks" || a == "--content-root" || a == "--cases") {
+            const std::string* v = value(a.c_str());
+            if (!v) return usage("bench: " + a + " needs a value");
+            if (a == "--json") json_path = *v;
+            else if (a == "--peer") peer = *v;
+            else if (a == "--content-root") content_root = *v;
+            else if (a == "--cases") cases_dir = *v;
+            else {
+                char* end = nullptr;
+                max_ticks = std::strtol(v->c_str(), &end, 10);
+                if (end == v->c_str() || *end != '\0' || max_ticks <= 0)
+                    return usage("bench: --max-ticks needs a positive whole number, not '" + *v + "'");
+            }
+        } else if (a == "--list") {
+            list = true;
+        } else if (!a.empty() && a[0] == '-') {
+            return usage("bench: unknown option '" + a + "'");
+        } else {
+            names.push_back(a);
+        }
+    }
+    if (!peer.empty() && peer != "fcl") return usage("bench: unknown peer '" + peer + "' (known: fcl)");
+    if (!peer.empty() && !fcl_available()) {
+        std::fprintf(stderr, "sulcus-cli: bench: this build has no FCL (install Debian libfcl-dev and rebuild)\n");
+        return kUsage;
+    }
+    if (content_root.empty()) content_root = default_content_root();
+    if (cases_dir.empty()) cases_dir = default_cases_dir();
+    if (list) {
+        for (const std::string& n : bench_scene_names(content_root)) std::printf("%s\n", n.c_str());
+        return kOk;
+    }
+    nlohmann::json out;
+    out["machine"] = machine_json();
+    out["scenes"] = nlohmann::json::array();
+    nlohmann::json peers = nlohmann::json::array();
+    std::printf("%-28s %9s %7s %7s %9s %9s %9s %9s %7s %8s %6s %10s\n", "scene", "triangles", "steps", "contact",
+                "median_us", "p99_us", "p999_us", "max_us", "allocs", "tests", "cands", "max_pen_m");
+    // One scene at a time: the quadrant's meshes are large.
+    const std::vector<std::string> all = bench_scene_names(content_root);
+    const std::vector<std::string> order = names.empty() ? all : names;
+    for (const std::string& n : order)
+        if (std::find(all.begin(), all.end(), n) == all.end())
+            return usage("bench: unknown scene '" + n + "' (the scenes: 'sulcus-cli bench --list')");
+    for (const std::string& name : order) {
+        BenchScenes loaded = load_bench_scenes({name}, content_root, cases_dir);
+        if (!loaded.error.empty()) {
+            std::fprintf(stderr, "%s\n", loaded.error.c_str());
+            return kUsage;
+        }
+        const BenchScene& b = loaded.scenes.front();
+        BenchRunOptions opt;
+        opt.max_ticks = max_ticks;
+        const BenchRun run = run_bench(b, RendererSettings{}, opt);
+        if (!run.error.empty()) {
+            std::fprintf(stderr, "%s\n", run.error.c_str());
+            return kUsage;
+        }
+        std::vector<double> times, stage[5];
+        long allocations = 0, contact = 0, two_regions = 0;
+        double tests = 0, cands = 0;
+        for (const BenchTick& t : run.ticks) {
+            times.push_back(t.step_us);
+            stage[0].push_back(t.stages.detect_us);
+            stage[1].push_back(t.stages.gather_us);
+            stage[2].push_back(t.stages.solve_us);
+            stage[3].push_back(t.stages.select_us);
+            stage[4].push_back(t.stages.force_us);
+            allocations += t.allocations;
+            contact += t.contact;
+            two_regions += t.regions >= 2;
+            tests += t.triangles_tested;
+            cands += t.candidates;
+        }
+        const double steps = double(std::max<size_t>(1, run.ticks.size()));
+        const Percentiles st = percentiles(times);
+        static const char* kStages[5] = {"detect", "gather", "solve", "select", "force"};
+        nlohmann::json stages;
+        for (int k = 0; k < 5; ++k) stages[kStages[k]] = pct_json(percentiles(stage[k]), false);
+        out["scenes"].push_back({{"name", b.name},
+                                 {"triangles", b.triangles},
+                                 {"steps", run.ticks.size()},
+                                 {"contact_steps", contact},
+                                 {"steps_with_two_regions", two_regions},
+                                 {"step_time_us", pct_json(st, true)},
+                                 {"stages_us", stages},
+                                 {"allocations_per_step", double(allocations) / steps},
+                                 {"allocations", allocations},
+                                 {"triangles_tested_per_step", tests / steps},
+                                 {"candidates_per_step", cands / steps},
+                                 {"checked_ticks", run.checked_ticks},
+                                 {"max_penetration_m", run.max_penetration_m},
+                                 {"max_gap_in_contact_m", run.max_gap_in_contact_m}});
+        std::printf("%-28s %9zu %7zu %7ld %9.1f %9.1f %9.1f %9.1f %7.3f %8.1f %6.2f %10.2e\n", b.name.c_str(), b.triangles,
+                    run.ticks.size(), contact, st.median, st.p99, st.p999, st.max, double(allocations) / steps,
+                    tests / steps, cands / steps, run.max_penetration_m);
+        std::fflush(stdout);
+        if (!peer.empty()) {
+            // The graphic poses of the run: where the tool really went, touching or near.
+            std::vector<Pose> poses;
+            const size_t stride = std::max<size_t>(1, run.ticks.size() / 400);
+            for (size_t i = 0; i < run.ticks.size(); i += stride) poses.push_back(run.ticks[i].graphic);
+            const PeerComparison c = compare_with_fcl(*run.model, poses);
+            peers.push_back(peer_json(b.name, c));
+            for (const PeerQueryTiming& q : c.queries)
+                std::printf("  vs fcl %-10s %5ld poses: ours median %8.2f us, fcl %8.2f us, fcl/ours %6.2f\n",
+                            q.query.c_str(), q.queries, q.ours_us.median, q.peer_us.median, q.ratio);
+            if (!c.error.empty()) std::printf("  vs fcl: %s\n", c.error.c_str());
+        }
+    }
+    if (!peer.empty()) out["peer"] = {{"name", peer}, {"scenes", peers}};
+    if (!json_path.empty()) {
+        std::string error;
+        if (!write_file_atomic(json_path, out.dump(2) + "\n", &error)) {
+            std::fprintf(stderr, "%s\n", error.c_str());
+            return kUsage;
+        }
+    }
+    return kOk;
+}
+
+}  // namespace sulcus::cli

@@ -1,0 +1,47 @@
+// One timed pass of the renderer over a bench scene's ticks, shared by `bench` and `wpd`: per
+// tick the step time (only the step is inside the clock), its stages and counters, heap
+// allocations, the pose and force; the exact checks run outside the clock on chosen ticks.
+#pragma once
+
+#include "cli/bench_scenes.h"
+#include "sulcus/engine/renderer.h"
+#include "sulcus/engine/runner.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace sulcus::cli {
+
+struct BenchTick {
+    double step_us = 0.0;
+    StageTimes stages;
+    Pose graphic;
+    Vec3 force_N{0.0};
+    Vec3 torque_Nm{0.0};
+    long allocations = 0;
+    int triangles_tested = 0;
+    int candidates = 0;
+    int regions = 0;
+    bool contact = false;
+};
+
+struct BenchRunOptions {
+    // Exact penetration and gap checks on every n-th tick with a force (0: none). Not timed.
+    int check_every = 10;
+    long max_ticks = 0;  // 0: every tick of the scene
+};
+
+struct BenchRun {
+    std::string error;
+    std::unique_ptr<Model> model;
+    std::vector<BenchTick> ticks;
+    long checked_ticks = 0;
+    double max_penetration_m = 0.0;   // into rigid objects, over the checked ticks
+    double max_gap_in_contact_m = 0.0;  // tool to the objects while a force is rendered
+};
+
+// `settings.haptic` is replaced by the scene's.
+BenchRun run_bench(const BenchScene& scene, RendererSettings settings, const BenchRunOptions& options);
+
+}  // namespace sulcus::cli

@@ -1,0 +1,275 @@
+// tool_distance and tool_collides give the same answers as brute force over every triangle of
+// every object (no BVH) at seeded random poses of a probe-like tool near a dense bumpy sphere,
+// cap the distance at max_distance_m, and measure a known gap exactly.
+#include "sulcus/engine/proximity.h"
+
+#include "geometry.h"
+#include "scene_helpers.h"
+#include "tool_placement.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+#include <utility>
+#include <vector>
+
+namespace sulcus {
+namespace {
+
+using test::mm;
+
+// An icosahedron subdivided `levels` times (20 * 4^levels triangles), its vertices pushed out to
+// a bumpy radius so the surface has concave and convex parts.
+TriMesh bumpy_sphere(int levels, double radius_m, const Vec3& centre) {
+    const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+    TriMesh m;
+    m.vertices = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                  {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+    m.triangles = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                   {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
+                   {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+    for (Vec3& v : m.vertices) v = glm::normalize(v);
+    for (int l = 0; l < levels; ++l) {
+        std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
+        auto midpoint = [&](uint32_t a, uint32_t b) {
+            const auto key = std::minmax(a, b);
+            auto it = mid.find(key);
+            if (it != mid.end()) return it->second;
+            m.vertices.push_back(glm::normalize(m.vertices[a] + m.vertices[b]));
+            const uint32_t i = uint32_t(m.vertices.size() - 1);
+            mid.emplace(key, i);
+            return i;
+        };
+        std::vector<std::array<uint32_t, 3>> next;
+        for (const auto& tri : m.triangles) {
+            const uint32_t ab = midpoint(tri[0], tri[1]), bc = midpoint(tri[1], tri[2]), ca = midpoint(tri[2], tri[0]);
+            next.push_back({tri[0], ab, ca});
+            next.push_back({tri[1], bc, ab});
+            next.push_back({tri[2], ca, bc});
+            next.push_back({ab, bc, ca});
+        }
+        m.triangles = std::move(next);
+    }
+    for (Vec3& v : m.vertices) {
+        const double bump = 1.0 + 0.06 * std::sin(7.0 * v.x) * std::sin(5.0 * v.y + 1.0) * std::sin(6.0 * v.z + 2.0);
+        v = centre + radius_m * bump * v;
+    }
+    return m;
+}
+
+// A probe-like tool in its own frame: a 16-sided rod (the tip, from the origin along +z) and a
+// stubby box above it (compact: no bounding capsules), as one mesh of two convex pieces.
+TriMesh probe_like_tool() {
+    std::vector<Vec2> polygon;
+    for (int i = 0; i < 16; ++i) {
+        const double a = 2.0 * M_PI * i / 16.0;
+        polygon.emplace_back(0.25 * mm * std::cos(a), 0.25 * mm * std::sin(a));
+    }
+    TriMesh tool = make_extruded_polygon(polygon, 0.0, 12 * mm);
+    const TriMesh box = make_box(Vec3(1.5 * mm, 1.5 * mm, 2 * mm), Vec3(0, 0, 14 * mm));
+    const uint32_t base = uint32_t(tool.vertices.size());
+    tool.vertices.insert(tool.vertices.end(), box.vertices.begin(), box.vertices.end());
+    for (const auto& t : box.triangles) tool.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    return tool;
+}
+
+struct Brute {
+    double distance = 1e300;
+    bool collides = false;
+};
+
+double box_gap(const Aabb& a, const Aabb& b) {
+    double d2 = 0.0;
+    for (int i = 0; i < 3; ++i) {
+        const double g = std::max({0.0, a.lo[i] - b.hi[i], b.lo[i] - a.hi[i]});
+        d2 += g * g;
+    }
+    return std::sqrt(d2);
+}
+
+// Every triangle of every object against every piece, no BVH. The only shortcut is the gap
+// between the piece's and the triangle's boxes (a lower bound on their distance): a triangle
+// whose boxes are apart cannot overlap the piece, nor be nearer than a gap no less than the least
+// distance so far. The distance over a triangle is exact whatever the cutoff once it is below it,
+// so passing the least distance so far keeps the minimum exact; `full` turns both shortcuts off.
+Brute brute_force(const Model& model, const Pose& pose, bool full) {
+    const ModelTool& tool = model.tool;
+    std::vector<Vec3> vertices(tool.mesh.vertices.size()), normals(tool.face_normals.size());
+    std::vector<double> offsets(tool.face_normals.size());
+    std::vector<Vec3> capsule(tool.pieces.size() * (kToolCapsules + 1));
+    const Quat q = pose.orientation;
+    place_tool_vertices(tool, q, pose.position, vertices.data());
+    place_tool_planes(tool, q, pose.position, normals.data(), offsets.data());
+    place_tool_capsule(tool, q, pose.position, capsule.data());
+    std::vector<Aabb> piece_box(tool.pieces.size());
+    for (size_t k = 0; k < tool.pieces.size(); ++k)
+        for (uint32_t v = 0; v < tool.pieces[k].vertex_count; ++v) piece_box[k].grow(vertices[tool.pieces[k].vertex_begin + v]);
+    Brute b;
+    for (const ModelObject& obj : model.objects) {
+        for (const auto& t : obj.mesh.triangles) {
+            const Vec3 &v0 = obj.mesh.vertices[t[0]], &v1 = obj.mesh.vertices[t[1]], &v2 = obj.mesh.vertices[t[2]];
+            Aabb tb;
+            tb.grow(v0);
+            tb.grow(v1);
+            tb.grow(v2);
+            for (size_t k = 0; k < tool.pieces.size(); ++k) {
+                const double gap = box_gap(piece_box[k], tb);
+                if (!full && gap > 0.0 && gap >= b.distance) continue;
+                const ConvexView view =
+                    tool_convex_view(tool, k, vertices.data(), normals.data(), offsets.data(), &q, capsule.data());
+                const double d = distance_convex_triangle(view, piece_triangles(tool, k),
+                                                          int(tool.pieces[k].triangle_count), v0, v1, v2,
+                                                          full ? 1e300 : b.distance);
+                b.distance = std::min(b.distance, d);
+                if ((full || gap == 0.0) && separate_convex_triangle(view, v0, v1, v2).separation <= 0.0)
+                    b.collides = true;
+            }
+        }
+    }
+    return b;
+}
+
+Quat random_rotation(std::mt19937_64& rng) {
+    std::normal_distribution<double> n(0.0, 1.0);
+    return glm::normalize(Quat(n(rng), n(rng), n(rng), n(rng)));
+}
+
+struct Scene {
+    std::unique_ptr<Model> model;
+    std::vector<Pose> poses;
+};
+
+// The bumpy sphere (20480 triangles, radius 10 mm) and a box beside it; poses put the tool's
+// tip from 1 mm inside to 3 mm outside the sphere's mean surface, pointing anywhere.
+Scene near_surface_scene(int pose_count) {
+    Scene s;
+    const TriMesh sphere = bumpy_sphere(5, 10 * mm, Vec3(0.0));
+    EXPECT_EQ(sphere.triangles.size(), 20480u);
+    const TriMesh block = make_box(Vec3(3 * mm, 3 * mm, 3 * mm), Vec3(0.0));
+    std::mt19937_64 rng(20240607);
+    const Pose block_pose = test::pose(Vec3(0, 0, 14 * mm), random_rotation(rng));
+    s.model = test::model_of(probe_like_tool(), {test::object("sphere", sphere), test::object("block", block, block_pose)});
+    std::normal_distribution<double> n(0.0, 1.0);
+    std::uniform_real_distribution<double> off(-1 * mm, 3 * mm);
+    for (int i = 0; i < pose_count; ++i) {
+        const Vec3 u = glm::normalize(Vec3(n(rng), n(rng), n(rng)));
+        s.poses.push_back(test::pose((10 * mm + off(rng)) * u, random_rotation(rng)));
+    }
+    return s;
+}
+
+TEST(Proximity, DistanceAndCollisionMatchBruteForceOverEveryTriangle) {
+    const Scene s = near_surface_scene(300);
+    ASSERT_TRUE(s.model);
+    ASSERT_EQ(s.model->tool.pieces.size(), 2u);
+    ASSERT_GT(s.model->tool.pieces[0].capsule_count, 0);  // the rod uses its capsules
+    size_t total = 0;
+    for (const ModelObject& o : s.model->objects) total += o.mesh.triangles.size();
+    int apart = 0, touching = 0, colliding = 0;
+    long tested = 0;
+    for (size_t i = 0; i < s.poses.size(); ++i) {
+        const Pose& p = s.poses[i];
+        const Brute b = brute_force(*s.model, p, i % 30 == 0);
+        ProximityStats st;
+        const double d = tool_distance(*s.model, p, 1.0, &st);
+        tested += st.triangles_tested;
+        EXPECT_NEAR(d, b.distance, 1e-12 * b.distance) << "pose " << i;
+        ProximityStats cst;
+        const bool c = tool_collides(*s.model, p, &cst);
+        EXPECT_EQ(c, b.collides) << "pose " << i;
+        // Overlap and zero distance are the same event.
+        EXPECT_EQ(c, d == 0.0) << "pose " << i;
+        apart += d > 0.0;
+        touching += d == 0.0;
+        colliding += c;
+    }
+    // The poses cover both sides, and the BVH spares almost every triangle.
+    EXPECT_GT(apart, 50);
+    EXPECT_GT(touching, 50);
+    EXPECT_GT(colliding, 50);
+    EXPECT_LT(double(tested) / double(s.poses.size()), 0.02 * double(total));
+}
+
+// Poses where a single triangle or two decide: each apart pose is advanced toward the sphere's
+// centre until the tool just touches (conservative advancement), then set 1 um short of that
+// and 1 um past it.
+TEST(Proximity, GrazingContactsMatchBruteForce) {
+    const Scene s = near_surface_scene(150);
+    ASSERT_TRUE(s.model);
+    int grazing = 0;
+    for (size_t i = 0; i < s.poses.size(); ++i) {
+        Pose p = s.poses[i];
+        if (tool_distance(*s.model, p, 1.0) == 0.0) continue;
+        const Vec3 in = -glm::normalize(p.position);
+        double d = 1.0;
+        for (int it = 0; it < 200 && d > 1e-9; ++it) {
+            d = tool_distance(*s.model, p, 1.0);
+            p.position += d * in;
+        }
+        if (d > 1e-9) continue;
+        for (double step : {-1e-6, 1e-6}) {
+            const Pose q = test::pose(p.position + step * in, p.orientation);
+            const Brute b = brute_force(*s.model, q, false);
+            EXPECT_NEAR(tool_distance(*s.model, q, 1.0), b.distance, 1e-12 * b.distance) << "pose " << i;
+            EXPECT_EQ(tool_collides(*s.model, q), b.collides) << "pose " << i;
+            if (step > 0.0) grazing += b.collides;
+        }
+    }
+    EXPECT_GT(grazing, 20);
+}
+
+TEST(Proximity, DistanceIsCappedAtMaxDistance) {
+    const Scene s = near_surface_scene(120);
+    ASSERT_TRUE(s.model);
+    const double cap = 0.5 * mm;
+    int capped = 0, below = 0;
+    for (size_t i = 0; i < s.poses.size(); ++i) {
+        const double exact = tool_distance(*s.model, s.poses[i], 1.0);
+        ProximityStats capped_stats, exact_stats;
+        const double d = tool_distance(*s.model, s.poses[i], cap, &capped_stats);
+        if (exact >= cap) {
+            EXPECT_EQ(d, cap) << "pose " << i;
+            ++capped;
+        } else {
+            EXPECT_EQ(d, exact) << "pose " << i;
+            ++below;
+        }
+        // A smaller cap only prunes more.
+        tool_distance(*s.model, s.poses[i], 1.0, &exact_stats);
+        EXPECT_LE(capped_stats.triangles_tested, exact_stats.triangles_tested) << "pose " << i;
+    }
+    EXPECT_GT(capped, 10);
+    EXPECT_GT(below, 10);
+}
+
+TEST(Proximity, BoxOneMillimetreAboveAPlane) {
+    // A 2 mm cube over a slab whose top face is y = 0.
+    const TriMesh slab = make_box(Vec3(50 * mm, 5 * mm, 50 * mm), Vec3(0, -5 * mm, 0));
+    const auto model = test::model_of(make_box(Vec3(1 * mm)), {test::object("slab", slab)});
+    ASSERT_TRUE(model);
+    const Pose above = test::pose(Vec3(3 * mm, 2 * mm, -7 * mm));
+    EXPECT_NEAR(tool_distance(*model, above, 1.0), 1e-3, 1e-12);
+    EXPECT_FALSE(tool_collides(*model, above));
+    // Below the cap the cap is returned.
+    EXPECT_EQ(tool_distance(*model, above, 0.5 * mm), 0.5 * mm);
+    // Turned 45 degrees about x: the lowest edge is sqrt(2) mm below the centre.
+    const Pose edge_down = test::pose(Vec3(0, 2 * mm, 0), test::axis_angle(Vec3(1, 0, 0), M_PI / 4));
+    EXPECT_NEAR(tool_distance(*model, edge_down, 1.0), 2e-3 - std::sqrt(2.0) * 1e-3, 1e-12);
+    // Sunk 0.1 mm into the slab: overlapping.
+    const Pose sunk = test::pose(Vec3(0, 0.9 * mm, 0));
+    EXPECT_EQ(tool_distance(*model, sunk, 1.0), 0.0);
+    EXPECT_TRUE(tool_collides(*model, sunk));
+}
+
+TEST(Proximity, NoObjectsMeansNothingNear) {
+    const auto model = test::model_of(make_box(Vec3(1 * mm)), {});
+    ASSERT_TRUE(model);
+    EXPECT_EQ(tool_distance(*model, Pose{}, 0.25), 0.25);
+    EXPECT_FALSE(tool_collides(*model, Pose{}));
+}
+
+}  // namespace
+}  // namespace sulcus
