@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <climits>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -102,24 +103,15 @@ int cmd_bench(const std::vector<std::string>& args) {
     bool list = false;
     for (size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
-        auto value = [&](const char* what) -> const std::string* {
-            if (i + 1 >= args.size()) return nullptr;
-            (void)what;
-            return &args[++i];
-        };
         if (a == "--json" || a == "--peer" || a == "--max-ticks" || a == "--content-root" || a == "--cases") {
-            const std::string* v = value(a.c_str());
-            if (!v) return usage("bench: " + a + " needs a value");
-            if (a == "--json") json_path = *v;
-            else if (a == "--peer") peer = *v;
-            else if (a == "--content-root") content_root = *v;
-            else if (a == "--cases") cases_dir = *v;
-            else {
-                char* end = nullptr;
-                max_ticks = std::strtol(v->c_str(), &end, 10);
-                if (end == v->c_str() || *end != '\0' || max_ticks <= 0)
-                    return usage("bench: --max-ticks needs a positive whole number, not '" + *v + "'");
-            }
+            if (i + 1 >= args.size()) return usage("bench: " + a + " needs a value");
+            const std::string& v = args[++i];
+            if (a == "--json") json_path = v;
+            else if (a == "--peer") peer = v;
+            else if (a == "--content-root") content_root = v;
+            else if (a == "--cases") cases_dir = v;
+            else if (!parse_whole(v, 1, LONG_MAX, &max_ticks))
+                return usage("bench: --max-ticks needs a positive whole number, not '" + v + "'");
         } else if (a == "--list") {
             list = true;
         } else if (!a.empty() && a[0] == '-') {
@@ -136,7 +128,7 @@ int cmd_bench(const std::vector<std::string>& args) {
     if (content_root.empty()) content_root = default_content_root();
     if (cases_dir.empty()) cases_dir = default_cases_dir();
     if (list) {
-        for (const std::string& n : bench_scene_names(content_root)) std::printf("%s\n", n.c_str());
+        for (const std::string& n : bench_scene_names()) std::printf("%s\n", n.c_str());
         return kOk;
     }
     nlohmann::json out;
@@ -146,7 +138,7 @@ int cmd_bench(const std::vector<std::string>& args) {
     std::printf("%-28s %9s %7s %7s %9s %9s %9s %9s %7s %8s %6s %10s\n", "scene", "triangles", "steps", "contact",
                 "median_us", "p99_us", "p999_us", "max_us", "allocs", "tests", "cands", "max_pen_m");
     // One scene at a time: the quadrant's meshes are large.
-    const std::vector<std::string> all = bench_scene_names(content_root);
+    const std::vector<std::string> all = bench_scene_names();
     const std::vector<std::string> order = names.empty() ? all : names;
     for (const std::string& n : order)
         if (std::find(all.begin(), all.end(), n) == all.end())

@@ -1,6 +1,7 @@
 #include "cli/bench_scenes.h"
 
 #include "sulcus/content/case_manifest.h"
+#include "sulcus/content/paper_scenes.h"
 #include "sulcus/content/probes.h"
 
 #include <algorithm>
@@ -23,13 +24,10 @@ size_t count_triangles(const SceneFile& s) {
     return n;
 }
 
-std::vector<std::string> paper_scene_files(const std::string& content_root) {
-    std::vector<std::string> files;
-    std::error_code ec;
-    for (const auto& e : fs::directory_iterator(fs::path(content_root) / "scenes" / "paper", ec))
-        if (e.path().extension() == ".json") files.push_back(e.path().string());
-    std::sort(files.begin(), files.end());
-    return files;
+// 0 to 1 over u in [0, 1], flat at both ends: every scripted motion eases in and out.
+double smooth(double u) {
+    u = std::clamp(u, 0.0, 1.0);
+    return u * u * (3.0 - 2.0 * u);
 }
 
 // The tick poses of the two-region session at site 46 B: the probe goes down the pocket as the
@@ -60,10 +58,6 @@ std::vector<Pose> two_region_ticks(const SceneFile& scene, const CaseManifest& m
     const long n = long(std::floor(total * rate)) + 1;
     std::vector<Pose> ticks;
     ticks.reserve(size_t(n));
-    auto smooth = [](double u) {
-        u = std::clamp(u, 0.0, 1.0);
-        return u * u * (3.0 - 2.0 * u);
-    };
     const Vec3 pressed = floor.position - press_m * site->axis;
     for (long i = 0; i < n; ++i) {
         double t = double(i) / rate;
@@ -145,10 +139,6 @@ BenchScene dense_wedge_scene() {
     const double t_descend = 0.6, t_press = 0.3, t_stroke = 2.0, t_rock = 1.0, t_rise = 0.5;
     const double total = t_descend + t_press + t_stroke + t_rock + t_rise;
     const long n = long(std::floor(total * s.rate_hz)) + 1;
-    auto smooth = [](double u) {
-        u = std::clamp(u, 0.0, 1.0);
-        return u * u * (3.0 - 2.0 * u);
-    };
     // The tip starts above the crowns and goes down the gap to where it is a little narrower
     // than the probe, then 0.3 mm further.
     const Vec3 top(0.0, 6.5 * mm, 0.0), wedged(0.0, 1.0 * mm, 0.0), pressed = wedged - Vec3(0.0, 0.6 * mm, 0.0);
@@ -188,9 +178,9 @@ std::vector<Pose> trajectory_ticks(const SceneFile& scene) {
     return ticks;
 }
 
-std::vector<std::string> bench_scene_names(const std::string& content_root) {
+std::vector<std::string> bench_scene_names() {
     std::vector<std::string> names;
-    for (const std::string& f : paper_scene_files(content_root)) names.push_back("paper/" + fs::path(f).stem().string());
+    for (const std::string& n : paper_scene_names()) names.push_back("paper/" + n);
     names.push_back(kQuadrant);
     names.push_back(kTwoRegions);
     names.push_back(kDenseWedge);
@@ -200,7 +190,7 @@ std::vector<std::string> bench_scene_names(const std::string& content_root) {
 BenchScenes load_bench_scenes(const std::vector<std::string>& names_in, const std::string& content_root,
                               const std::string& cases_dir) {
     BenchScenes out;
-    const std::vector<std::string> all = bench_scene_names(content_root);
+    const std::vector<std::string> all = bench_scene_names();
     const std::vector<std::string> names = names_in.empty() ? all : names_in;
     for (const std::string& name : names) {
         if (std::find(all.begin(), all.end(), name) == all.end()) {

@@ -25,8 +25,8 @@ struct BenchScenes {
     std::string error;  // one line when a scene cannot be loaded
 };
 
-// The names of the fixed set, in the order they run.
-std::vector<std::string> bench_scene_names(const std::string& content_root);
+// The names of the fixed set, in the order they run (the paper scenes as content lists them).
+std::vector<std::string> bench_scene_names();
 
 // Loads the named scenes (all of them when `names` is empty). `content_root` holds
 // scenes/paper/; `cases_dir` the built cases (build/cases).

@@ -14,6 +14,9 @@ inline constexpr int kInternal = 3;
 // Prints "sulcus-cli: MSG" and a hint to stderr; returns kUsage.
 int usage(const std::string& msg);
 
+// The whole of `text` as a whole number in [lo, hi]; false when it is not one.
+bool parse_whole(const std::string& text, long lo, long hi, long* out);
+
 extern const char* const kHelpContent;
 int cmd_content(const std::vector<std::string>& args);
 

@@ -5,7 +5,10 @@
 #include "sulcus/engine/runner.h"
 #include "sulcus/engine/scene_file.h"
 
+#include <cerrno>
+#include <climits>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <filesystem>
@@ -18,6 +21,15 @@ int usage(const std::string& msg) {
     std::fprintf(stderr, "sulcus-cli: %s\n", msg.c_str());
     std::fprintf(stderr, "try 'sulcus-cli help'\n");
     return kUsage;
+}
+
+bool parse_whole(const std::string& text, long lo, long hi, long* out) {
+    char* end = nullptr;
+    errno = 0;
+    const long n = std::strtol(text.c_str(), &end, 10);
+    if (end == text.c_str() || *end != '\0' || errno == ERANGE || n < lo || n > hi) return false;
+    *out = n;
+    return true;
 }
 
 }  // namespace sulcus::cli

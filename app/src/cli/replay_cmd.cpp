@@ -102,9 +102,8 @@ int cmd_replay(const std::vector<std::string>& args) {
             check = true;
         } else if (a == "--jobs") {
             if (!(v = value("a number"))) return kUsage;
-            char* end = nullptr;
-            const long n = std::strtol(v->c_str(), &end, 10);
-            if (end == v->c_str() || *end || n < 1 || n > 256) return usage("replay: --jobs: '" + *v + "' is not 1..256");
+            long n = 0;
+            if (!parse_whole(*v, 1, 256, &n)) return usage("replay: --jobs: '" + *v + "' is not 1..256");
             jobs = static_cast<int>(n);
         } else if (a == "--shard") {
             if (!(v = value("I/N"))) return kUsage;

@@ -10,6 +10,7 @@
 #include "sulcus/engine/runner.h"
 #include "so3.h"
 
+#include <climits>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
@@ -172,9 +173,8 @@ int cmd_wpd(const std::vector<std::string>& args) {
             else if (a == "--content-root") content_root = v;
             else if (a == "--cases") cases_dir = v;
             else {
-                char* end = nullptr;
-                const long n = std::strtol(v.c_str(), &end, 10);
-                if (end == v.c_str() || *end != '\0' || n <= 0)
+                long n = 0;
+                if (!parse_whole(v, 1, INT_MAX, &n))
                     return usage("wpd: " + a + " needs a positive whole number, not '" + v + "'");
                 if (a == "--max-ticks") opt.max_ticks = n;
                 else opt.check_every = int(n);
