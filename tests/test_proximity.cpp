@@ -120,9 +120,8 @@ Brute brute_force(const Model& model, const Pose& pose, bool full) {
                 if (!full && gap > 0.0 && gap >= b.distance) continue;
                 const ConvexView view =
                     tool_convex_view(tool, k, vertices.data(), normals.data(), offsets.data(), &q, capsule.data());
-                const double d = distance_convex_triangle(view, piece_triangles(tool, k),
-                                                          int(tool.pieces[k].triangle_count), v0, v1, v2,
-                                                          full ? 1e300 : b.distance);
+                const double d = distance_convex_triangle_by_faces(view, piece_triangles(tool, k),
+                                                                   int(tool.pieces[k].triangle_count), v0, v1, v2);
                 b.distance = std::min(b.distance, d);
                 if ((full || gap == 0.0) && separate_convex_triangle(view, v0, v1, v2).separation <= 0.0)
                     b.collides = true;
@@ -213,7 +212,8 @@ TEST(Proximity, GrazingContactsMatchBruteForce) {
         for (double step : {-1e-6, 1e-6}) {
             const Pose q = test::pose(p.position + step * in, p.orientation);
             const Brute b = brute_force(*s.model, q, false);
-            EXPECT_NEAR(tool_distance(*s.model, q, 1.0), b.distance, 1e-12 * b.distance) << "pose " << i;
+            // To rounding: a femtometre, on coordinates of centimetres.
+            EXPECT_NEAR(tool_distance(*s.model, q, 1.0), b.distance, 1e-15) << "pose " << i;
             EXPECT_EQ(tool_collides(*s.model, q), b.collides) << "pose " << i;
             if (step > 0.0) grazing += b.collides;
         }

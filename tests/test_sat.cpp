@@ -88,13 +88,14 @@ void capsule_bound_holds(const TriMesh& tool_mesh, double scale, unsigned seed) 
         const double s = 0.3 * scale;
         const Vec3 a = c + s * Vec3(u(rng), u(rng), u(rng)), b = c + s * Vec3(u(rng), u(rng), u(rng)),
                    d = c + s * Vec3(u(rng), u(rng), u(rng));
-        const double exact = distance_convex_triangle(without, tris, int(tool.mesh.triangles.size()), a, b, d);
+        const double exact = distance_convex_triangle_by_faces(without, tris, int(tool.mesh.triangles.size()), a, b, d);
         const double lower = capsule_lower_bound(with, a, b, d);
         EXPECT_LE(lower, exact + 1e-12 * scale) << "trial " << t;
         useful += lower > 0.5 * exact && exact > 0.0;
         // With the bound in place the distance is still exact when it matters (below the cutoff).
         EXPECT_NEAR(distance_convex_triangle(with, tris, int(tool.mesh.triangles.size()), a, b, d, 1e300), exact,
                     1e-12 * scale);
+        EXPECT_NEAR(distance_convex_triangle(without, tris, int(tool.mesh.triangles.size()), a, b, d), exact, 1e-13);
     }
     EXPECT_GT(useful, 100);  // the bound is not vacuous
 }
@@ -111,6 +112,71 @@ TEST(CapsuleBound, OnlyLongToolsUseCapsules) {
     const ModelBuild probe = build_model(make_probe_tip_collision(ProbeKind::Williams), {}, RendererSettings{});
     ASSERT_TRUE(probe.model);
     EXPECT_EQ(probe.model->tool.pieces[0].capsule_count, kToolCapsules);
+}
+
+}  // namespace
+}  // namespace sulcus
+
+namespace sulcus {
+namespace {
+
+// GJK's bounds bracket the exact distance (triangles of the polytope against the triangle), meet
+// it within their tolerance, and say 0 exactly when the separating-axis test finds an overlap.
+void gjk_brackets_the_distance(const TriMesh& tool_mesh, double scale, unsigned seed) {
+    const ModelBuild mb = build_model(tool_mesh, {}, RendererSettings{});
+    ASSERT_TRUE(mb.model) << mb.error;
+    const ModelTool& tool = mb.model->tool;
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::vector<Vec3> verts(tool.mesh.vertices.size()), normals(tool.face_normals.size());
+    std::vector<double> offsets(tool.face_normals.size());
+    const auto* tris = piece_triangles(tool, 0);
+    int separated = 0, overlapping = 0, touching_close = 0;
+    for (int t = 0; t < 3000; ++t) {
+        const Quat q = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+        const Vec3 p(u(rng) * scale, u(rng) * scale, u(rng) * scale);
+        place_tool_vertices(tool, q, p, verts.data());
+        place_tool_planes(tool, q, p, normals.data(), offsets.data());
+        const ConvexView view = tool_convex_view(tool, 0, verts.data(), normals.data(), offsets.data(), &q);
+        // Triangles of every size near a tool vertex, some lying on a tool face at a tiny gap.
+        const Vec3 c = verts[size_t(rng() % verts.size())] + 0.2 * scale * Vec3(u(rng), u(rng), u(rng));
+        const double s = scale * std::pow(10.0, -2.0 + 2.0 * (u(rng) + 1.0) / 2.0);
+        Vec3 a = c + s * Vec3(u(rng), u(rng), u(rng)), b = c + s * Vec3(u(rng), u(rng), u(rng)),
+             d = c + s * Vec3(u(rng), u(rng), u(rng));
+        if (t % 5 == 0) {
+            // Flat on face f, 1e-9..1e-5 m off it.
+            const int f = int(rng() % tool.face_normals.size());
+            const Vec3 n = normals[size_t(f)];
+            const double gap = std::pow(10.0, -9.0 + 4.0 * (u(rng) + 1.0) / 2.0);
+            for (Vec3* x : {&a, &b, &d}) *x += (offsets[size_t(f)] + gap - glm::dot(n, *x)) * n;
+        }
+        const double exact = distance_convex_triangle_by_faces(view, tris, int(tool.mesh.triangles.size()), a, b, d);
+        const DistanceBounds g = convex_triangle_distance(verts.data(), int(verts.size()), a, b, d);
+        ASSERT_LE(g.lower, exact + 1e-13) << "trial " << t;
+        ASSERT_GE(g.upper, exact - 1e-13) << "trial " << t;
+        if (exact > 0.0) {
+            ++separated;
+            EXPECT_NEAR(g.lower, exact, 1e-12) << "trial " << t;
+            touching_close += exact < 1e-6;
+        } else {
+            ++overlapping;
+            EXPECT_EQ(g.lower, 0.0) << "trial " << t;
+        }
+        // A cutoff stops it early with a lower bound of at least the cutoff, or the distance.
+        const DistanceBounds cut = convex_triangle_distance(verts.data(), int(verts.size()), a, b, d, 0.5 * exact);
+        EXPECT_LE(cut.lower, exact + 1e-13);
+        EXPECT_GE(cut.lower, std::min(0.5 * exact, g.lower) - 1e-13);
+    }
+    EXPECT_GT(separated, 300);
+    EXPECT_GT(overlapping, 300);
+    EXPECT_GT(touching_close, 50);
+}
+
+TEST(Gjk, BoundsBracketTheExactDistanceOnABox) { gjk_brackets_the_distance(make_box(Vec3(1e-3, 2e-3, 0.5e-3)), 2e-3, 8); }
+
+TEST(Gjk, BoundsBracketTheExactDistanceOnProbeTips) {
+    gjk_brackets_the_distance(make_probe_tip_collision(ProbeKind::Williams), 1e-3, 9);
+    gjk_brackets_the_distance(make_probe_tip_collision(ProbeKind::Nabers), 1e-3, 10);
 }
 
 }  // namespace

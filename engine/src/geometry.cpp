@@ -224,14 +224,11 @@ double capsule_lower_bound(const ConvexView& poly, const Vec3& a, const Vec3& b,
     return lower;
 }
 
-double distance_convex_triangle(const ConvexView& poly, const uint32_t (*triangles)[3], int triangle_count,
-                                const Vec3& a, const Vec3& b, const Vec3& c, double cutoff) {
-    const double lower = capsule_lower_bound(poly, a, b, c);
-    if (lower >= cutoff) return lower;
+double distance_convex_triangle_by_faces(const ConvexView& poly, const uint32_t (*triangles)[3], int triangle_count,
+                                         const Vec3& a, const Vec3& b, const Vec3& c) {
     // Overlap first: the separating-axis test is exact for convex against triangle.
     const SatResult sat = separate_convex_triangle(poly, a, b, c);
     if (sat.separation <= 0.0) return 0.0;
-    if (sat.separation >= cutoff) return sat.separation;  // also a lower bound
     const Vec3 q[3] = {a, b, c};
     double best = 1e300;
     for (int i = 0; i < triangle_count; ++i) {
@@ -246,6 +243,18 @@ double distance_convex_triangle(const ConvexView& poly, const uint32_t (*triangl
         best = std::min(best, triangle_triangle_distance(p, q));
     }
     return best;
+}
+
+double distance_convex_triangle(const ConvexView& poly, const uint32_t (*triangles)[3], int triangle_count,
+                                const Vec3& a, const Vec3& b, const Vec3& c, double cutoff) {
+    const double lower = capsule_lower_bound(poly, a, b, c);
+    if (lower >= cutoff) return lower;
+    // GJK: a lower bound of at least the cutoff, or the distance to within its tolerance.
+    constexpr double kTolerance = 1e-13;
+    const DistanceBounds g = convex_triangle_distance(poly, a, b, c, cutoff, kTolerance);
+    if (g.lower >= cutoff || g.upper - g.lower <= kTolerance) return g.lower;
+    // Rounding stalled it: the separating-axis test and the polytope's triangles.
+    return distance_convex_triangle_by_faces(poly, triangles, triangle_count, a, b, c);
 }
 
 }  // namespace sulcus

@@ -69,11 +69,37 @@ struct SatResult {
 };
 SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c);
 
-// Distance between the convex polytope (as its triangles) and a triangle: 0 when they touch or
-// overlap. `triangles` index poly.vertices.
-// With a bounding capsule, a lower bound of at least `cutoff` is returned as soon as it is known
-// (callers after the least distance over many triangles pass the least so far).
+// Bounds on the distance between a convex polytope (the hull of `count` points) and triangle
+// (a, b, c), by the GJK iteration: lower <= distance <= upper, both 0 when they overlap or touch.
+// Stops once the lower bound reaches `cutoff` (callers after the least distance over many
+// triangles pass the least so far) or the bounds are within `tolerance` (m) of each other. The
+// lower bound is a separating gap along a direction, so it holds whatever rounding did.
+struct DistanceBounds {
+    double lower = 0.0;
+    double upper = 1e300;
+    int iterations = 0;
+};
+// `hint`, when given, is a direction roughly from the triangle towards the polytope: the search
+// starts there.
+DistanceBounds convex_triangle_distance(const Vec3* poly, int count, const Vec3& a, const Vec3& b, const Vec3& c,
+                                        double cutoff = 1e300, double tolerance = 1e-13, int max_iterations = 64,
+                                        const Vec3* hint = nullptr);
+// The same for a polytope's view (its vertices).
+DistanceBounds convex_triangle_distance(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c,
+                                        double cutoff = 1e300, double tolerance = 1e-13, int max_iterations = 64,
+                                        const Vec3* hint = nullptr);
+
+// Distance between the convex polytope and a triangle: 0 when they touch or overlap; to within
+// 1e-13 m (GJK), or exactly from the polytope's triangles when rounding stalls GJK. With a
+// bounding capsule or a finite `cutoff`, a lower bound of at least `cutoff` is returned as soon as
+// it is known (callers after the least distance over many triangles pass the least so far).
+// `triangles` index poly.vertices.
 double distance_convex_triangle(const ConvexView& poly, const uint32_t (*triangles)[3], int triangle_count,
                                 const Vec3& a, const Vec3& b, const Vec3& c, double cutoff = 1e300);
+
+// The same distance from the separating-axis test and the distances to the polytope's triangles
+// it faces: the slow reference.
+double distance_convex_triangle_by_faces(const ConvexView& poly, const uint32_t (*triangles)[3], int triangle_count,
+                                         const Vec3& a, const Vec3& b, const Vec3& c);
 
 }  // namespace sulcus

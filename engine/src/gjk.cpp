@@ -1,0 +1,200 @@
+// Distance bounds between a convex polytope (its vertices) and a triangle by the
+// Gilbert-Johnson-Keerthi iteration on their Minkowski difference D = P - T.
+//
+// Safety does not rest on the simplex arithmetic: every lower bound reported is the gap along a
+// direction v between the polytope's and the triangle's projections, min_D v.z / |v|, which bounds
+// the distance for any v. The simplex only chooses v; rounding in it can cost iterations, never a
+// bound that is too high. The upper bound is |v| for v a point of (the hull of) D.
+#include "geometry.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sulcus {
+
+namespace {
+
+struct Simplex {
+    Vec3 p[4];
+    int n = 0;
+};
+
+// The point of D least along v (the support of D in -v).
+inline Vec3 support_least(const Vec3* poly, int count, const Vec3 tri[3], const Vec3& v) {
+    int ia = 0;
+    double best = glm::dot(v, poly[0]);
+    for (int i = 1; i < count; ++i) {
+        const double s = glm::dot(v, poly[i]);
+        if (s < best) {
+            best = s;
+            ia = i;
+        }
+    }
+    int ib = 0;
+    double top = glm::dot(v, tri[0]);
+    for (int k = 1; k < 3; ++k) {
+        const double s = glm::dot(v, tri[k]);
+        if (s > top) {
+            top = s;
+            ib = k;
+        }
+    }
+    return poly[ia] - tri[ib];
+}
+
+// Closest point to the origin of segment a-b; reduces the simplex to the feature holding it.
+Vec3 closest_segment(Simplex& s) {
+    const Vec3 a = s.p[0], b = s.p[1];
+    const Vec3 ab = b - a;
+    const double den = glm::dot(ab, ab);
+    const double t = den > 0.0 ? -glm::dot(a, ab) / den : 0.0;
+    if (t <= 0.0) {
+        s.n = 1;
+        return a;
+    }
+    if (t >= 1.0) {
+        s.p[0] = b;
+        s.n = 1;
+        return b;
+    }
+    return a + t * ab;
+}
+
+// Closest point to the origin of triangle a, b, c; reduces the simplex likewise. A triangle
+// with no area is taken as its longest edge.
+Vec3 closest_triangle(Simplex& s) {
+    const Vec3 a = s.p[0], b = s.p[1], c = s.p[2];
+    const Vec3 nrm = glm::cross(b - a, c - a);
+    const double scale = std::max({glm::dot(b - a, b - a), glm::dot(c - a, c - a), glm::dot(c - b, c - b)});
+    if (glm::dot(nrm, nrm) <= 1e-24 * scale * scale) {
+        const double ab = glm::dot(b - a, b - a), ac = glm::dot(c - a, c - a), bc = glm::dot(c - b, c - b);
+        if (ac >= ab && ac >= bc) s.p[1] = c;
+        else if (bc >= ab && bc >= ac) s.p[0] = c;
+        s.n = 2;
+        return closest_segment(s);
+    }
+    const TriClosest tc = closest_on_triangle(Vec3(0.0), a, b, c);
+    switch (tc.region) {
+        case TriRegion::Face:
+            // Along the normal: its direction does not suffer the cancellation of a small point
+            // found from large ones, which would cost the lower bound its last digits.
+            return nrm * (glm::dot(nrm, a) / glm::dot(nrm, nrm));
+        case TriRegion::Edge0: s.n = 2; break;                       // a b
+        case TriRegion::Edge1: s.p[0] = c; s.n = 2; break;           // c b
+        case TriRegion::Edge2: s.p[1] = c; s.n = 2; break;           // a c
+        case TriRegion::Vertex0: s.n = 1; break;
+        case TriRegion::Vertex1: s.p[0] = b; s.n = 1; break;
+        case TriRegion::Vertex2: s.p[0] = c; s.n = 1; break;
+    }
+    return tc.point;
+}
+
+// Closest point to the origin of tetrahedron s; `inside` when the origin lies in it.
+Vec3 closest_tetrahedron(Simplex& s, bool& inside) {
+    inside = false;
+    static constexpr int kFace[4][4] = {{0, 1, 2, 3}, {0, 1, 3, 2}, {0, 2, 3, 1}, {1, 2, 3, 0}};
+    bool outside_any = false;
+    double best = 1e300;
+    Simplex best_s;
+    Vec3 best_p(0.0);
+    for (const auto& f : kFace) {
+        const Vec3 &a = s.p[f[0]], &b = s.p[f[1]], &c = s.p[f[2]], &d = s.p[f[3]];
+        const Vec3 nrm = glm::cross(b - a, c - a);
+        const double so = -glm::dot(nrm, a);     // origin's side
+        const double sd = glm::dot(nrm, d - a);  // the fourth vertex's side
+        // The origin beyond this face (or the tetrahedron flat): the face may hold the closest point.
+        if (!(so * sd < 0.0) && !(sd == 0.0)) continue;
+        outside_any = true;
+        Simplex t;
+        t.p[0] = a;
+        t.p[1] = b;
+        t.p[2] = c;
+        t.n = 3;
+        const Vec3 q = closest_triangle(t);
+        const double d2 = glm::dot(q, q);
+        if (d2 < best) {
+            best = d2;
+            best_s = t;
+            best_p = q;
+        }
+    }
+    if (!outside_any) {
+        inside = true;
+        return Vec3(0.0);
+    }
+    s = best_s;
+    return best_p;
+}
+
+}  // namespace
+
+namespace {
+
+DistanceBounds distance_bounds(const Vec3* poly, int count, const Vec3& a, const Vec3& b, const Vec3& c, double cutoff,
+                                      double tolerance, int max_iterations, const Vec3* hint) {
+    DistanceBounds r;
+    const Vec3 tri[3] = {a, b, c};
+    Simplex s;
+    // From the hint, the point of D least along it: often its gap already settles the cutoff.
+    s.p[0] = hint && glm::dot(*hint, *hint) > 0.0 ? support_least(poly, count, tri, *hint) : poly[0] - a;
+    s.n = 1;
+    Vec3 v = s.p[0];
+    double lower = 0.0;
+    if (hint && glm::dot(*hint, *hint) > 0.0) {
+        // The gap along the hint itself.
+        lower = std::max(0.0, glm::dot(*hint, s.p[0]) / glm::length(*hint));
+        r.lower = lower;
+        if (lower >= cutoff) return r;
+    }
+    for (int it = 0; it < max_iterations; ++it) {
+        r.iterations = it + 1;
+        const double vv = glm::dot(v, v);
+        if (vv == 0.0) {
+            r.lower = r.upper = 0.0;
+            return r;
+        }
+        const double vl = std::sqrt(vv);
+        const Vec3 w = support_least(poly, count, tri, v);
+        // Every point z of D has v.z >= v.w: the gap along v bounds the distance.
+        lower = std::max(lower, glm::dot(v, w) / vl);
+        r.lower = lower;
+        r.upper = vl;
+        if (lower >= cutoff || vl - lower <= tolerance) return r;
+        // w adds nothing the simplex has: no further progress is possible.
+        bool known = false;
+        for (int k = 0; k < s.n; ++k) known |= s.p[k] == w;
+        if (known) return r;
+        s.p[s.n++] = w;
+        Vec3 next;
+        if (s.n == 2) {
+            next = closest_segment(s);
+        } else if (s.n == 3) {
+            next = closest_triangle(s);
+        } else {
+            bool inside = false;
+            next = closest_tetrahedron(s, inside);
+            if (inside) {
+                r.lower = r.upper = 0.0;
+                return r;
+            }
+        }
+        // Rounding can stall the descent: the bounds so far stand.
+        if (!(glm::dot(next, next) < vv)) return r;
+        v = next;
+    }
+    return r;
+}
+
+}  // namespace
+
+DistanceBounds convex_triangle_distance(const Vec3* poly, int count, const Vec3& a, const Vec3& b, const Vec3& c,
+                                        double cutoff, double tolerance, int max_iterations, const Vec3* hint) {
+    return distance_bounds(poly, count, a, b, c, cutoff, tolerance, max_iterations, hint);
+}
+
+DistanceBounds convex_triangle_distance(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c,
+                                        double cutoff, double tolerance, int max_iterations, const Vec3* hint) {
+    return distance_bounds(poly.vertices, poly.vertex_count, a, b, c, cutoff, tolerance, max_iterations, hint);
+}
+
+}  // namespace sulcus
