@@ -2,6 +2,8 @@
 // brute force), and its structure keeps the promises the query relies on.
 #include "sulcus/engine/bvh.h"
 
+#include "geometry.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -138,6 +140,50 @@ TEST(Bvh, RandomSoupsMatchBruteForce) {
             }
         }
     }
+}
+
+TEST(Bvh, CapsuleChainsVisitEveryTriangleWithinReachOnce) {
+    // Every triangle within radius + extra of some capsule of the chain is visited, and none
+    // twice, against the exact segment-triangle distance.
+    std::mt19937_64 rng(777);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    int near = 0, skipped = 0;
+    for (size_t n : {1u, 50u, 3000u}) {
+        const TriMesh m = random_soup(n, rng);
+        const Bvh bvh(m, 4);
+        for (int q = 0; q < 60; ++q) {
+            const int count = 1 + int(rng() % 6);
+            std::vector<Vec3> points{Vec3(u(rng), u(rng), u(rng))};
+            std::vector<double> radii;
+            for (int k = 0; k < count; ++k) {
+                points.push_back(points.back() + 0.15 * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5));
+                radii.push_back(0.05 * u(rng));
+            }
+            const double extra = 0.02 * u(rng);
+            std::vector<int> seen(n, 0);
+            EXPECT_TRUE(bvh.query_capsule_chain(points.data(), radii.data(), count, extra, [&](uint32_t t) {
+                ++seen[t];
+                return true;
+            }));
+            for (uint32_t t = 0; t < n; ++t) {
+                EXPECT_LE(seen[t], 1) << "triangle " << t;
+                const auto& tr = m.triangles[t];
+                double d = 1e300;
+                for (int k = 0; k < count; ++k)
+                    d = std::min(d, segment_triangle_distance(points[size_t(k)], points[size_t(k) + 1], m.vertices[tr[0]],
+                                                              m.vertices[tr[1]], m.vertices[tr[2]]) -
+                                        radii[size_t(k)] - extra);
+                if (d <= 0.0) {
+                    ++near;
+                    EXPECT_EQ(seen[t], 1) << "triangle " << t << " within reach";
+                } else if (seen[t] == 0) {
+                    ++skipped;
+                }
+            }
+        }
+    }
+    EXPECT_GT(near, 100);
+    EXPECT_GT(skipped, 10000);  // it does pass over what is out of reach
 }
 
 TEST(Bvh, QueriesThatTouchOnlyAFaceOrCornerCount) {

@@ -16,23 +16,16 @@ namespace {
 struct CcdCase {
     std::unique_ptr<Model> model;
     std::vector<NearTriangle> near;
-    std::vector<Vec3> v, n;
-    std::vector<double> d;
     TriMesh tool, object_mesh;
 
     CcdCase(const TriMesh& tool_mesh, const TriMesh& obj) : tool(tool_mesh), object_mesh(obj) {
         model = model_of(tool, {object("obj", obj)});
         for (uint32_t t = 0; t < obj.triangles.size(); ++t) near.push_back({0, t});
-        v.resize(tool.vertices.size());
-        n.resize(model->tool.face_normals.size());
-        d.resize(model->tool.face_normals.size());
     }
 
-    CcdResult run(const Pose& base, const double x[6], double clearance) {
-        Quat q = base.orientation;
-        Vec3 cap[kToolCapsules + 1];
-        const CcdScratch s{v.data(), n.data(), d.data(), &q, cap};
-        return conservative_advancement(*model, base, x, clearance, near.data(), static_cast<int>(near.size()), 4096, s);
+    CcdResult run(const Pose& base, const double x[6], double clearance, bool first_only = false) {
+        return conservative_advancement(*model, base, x, clearance, near.data(), static_cast<int>(near.size()), 4096,
+                                        first_only);
     }
 
     Pose at(const Pose& base, const double x[6], double tau) const {
@@ -108,6 +101,13 @@ TEST(Ccd, AgreesWithBruteForceSamplingOnRandomMotions) {
             // Sampling saw a contact: CCD must have reported one no later.
             EXPECT_TRUE(r.hit) << trial;
             EXPECT_LE(r.toi, sampled + 1e-12) << trial;
+        }
+        // Stopping at the first contact found gives the same verdict, at a contact.
+        const CcdResult first = c.run(base, x, 1e-6, true);
+        EXPECT_EQ(first.hit, r.hit) << trial;
+        EXPECT_GE(first.toi, r.toi) << trial;
+        if (first.hit && !first.exhausted) {
+            EXPECT_LE(exact_check(c.tool, c.at(base, x, first.toi), objs, 1.0).distance_m, 1e-6 + 1e-12) << trial;
         }
         if (r.hit && !r.exhausted) {
             ++hits;

@@ -8,59 +8,73 @@
 
 namespace sulcus {
 
+// Each triangle advances on its own, in the frame of the moving tool (the triangle is carried
+// into it, three points, rather than the tool into the world): a triangle far from the path
+// costs one bound, one near it the advances it needs, and none is tested again for the steps
+// another one needed. The search ends at the first contact found so far: no later one matters.
 CcdResult conservative_advancement(const Model& model, const Pose& base, const double x[6], double clearance,
-                                   const NearTriangle* near, int near_count, int max_iterations,
-                                   const CcdScratch& scratch) {
+                                   const NearTriangle* near, int near_count, int max_iterations, bool first_only) {
     CcdResult r;
     const Vec3 dp(x[0], x[1], x[2]);
     const Vec3 th(x[3], x[4], x[5]);
-    const double speed = glm::length(dp) + glm::length(th) * model.tool.radius_m;
+    const double move = glm::length(dp), turn = glm::length(th);
     const ModelTool& tool = model.tool;
-    double tau = 0.0;
-    for (int it = 0; it < max_iterations; ++it) {
-        r.iterations = it + 1;
-        const Quat q = glm::normalize(quat_exp(tau * th) * base.orientation);
-        const Vec3 p = base.position + tau * dp;
-        place_tool_vertices(tool, q, p, scratch.vertices);
-        place_tool_planes(tool, q, p, scratch.normals, scratch.offsets);
-        *scratch.rotation = q;
-        place_tool_capsule(tool, q, p, scratch.capsule);
-        double d = 1e300;
-        // A distance this large lets the rest of the motion go through in one advance, so any
-        // lower bound that reaches it is as good as the exact distance.
-        const double enough = clearance + speed * (1.0 - tau);
-        for (int i = 0; i < near_count; ++i) {
-            // The triangle's distance bound at the start, less how far any point has moved since:
-            // when that already reaches what this advance needs, the exact distance is not.
-            const double bound = near[i].lower_m - speed * tau;
-            if (bound >= std::min(d, enough)) {
-                d = std::min(d, bound);
-                continue;
-            }
+    double limit = 1.0;  // the first contact so far
+    for (int i = 0; i < near_count; ++i) {
+        const NearTriangle& nt = near[i];
+        const ToolPiece& piece = tool.pieces[nt.piece];
+        // No point of this piece moves faster than this per unit tau.
+        const double speed = move + turn * piece.radius_m;
+        // The bound at the start leaves room for the whole motion up to the limit.
+        if (nt.lower_m - speed * limit > clearance) continue;
+        ConvexView view;
+        view.vertices = tool.mesh.vertices.data() + piece.vertex_begin;
+        view.vertex_count = int(piece.vertex_count);
+        view.capsule = piece.capsule_points.data();
+        view.capsule_radii = piece.capsule_radii_m.data();
+        view.capsule_count = piece.capsule_count;
+        const ModelObject& obj = model.objects[nt.object];
+        const auto& t = obj.mesh.triangles[nt.tri];
+        const Vec3 world[3] = {obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]};
+        double tau = 0.0;
+        bool done = false;
+        for (int it = 0; it < max_iterations && !done; ++it) {
             ++r.tests;
-            const ModelObject& obj = model.objects[near[i].object];
-            const auto& t = obj.mesh.triangles[near[i].tri];
-            const size_t k = near[i].piece;
-            const ConvexView view = tool_convex_view(tool, k, scratch.vertices, scratch.normals, scratch.offsets,
-                                                     scratch.rotation, scratch.capsule);
-            d = std::min(d, distance_convex_triangle(view, piece_triangles(tool, k), int(tool.pieces[k].triangle_count),
-                                                     obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
-                                                     obj.mesh.vertices[t[2]], std::min(d, enough)));
-            if (d <= clearance) {
+            r.iterations = std::max(r.iterations, it + 1);
+            const Quat qi = glm::conjugate(glm::normalize(quat_exp(tau * th) * base.orientation));
+            const Vec3 p = base.position + tau * dp;
+            const Vec3 a = qi * (world[0] - p), b = qi * (world[1] - p), c = qi * (world[2] - p);
+            // A distance this large lets the rest of the motion up to the limit go through.
+            const double enough = clearance + speed * (limit - tau);
+            double d = capsule_lower_bound(view, a, b, c);
+            if (d < enough) d = convex_triangle_distance(view, a, b, c, enough).lower;
+            if (d >= enough) {
+                done = true;
+            } else if (d <= clearance) {
                 r.hit = true;
-                r.toi = tau;
+                limit = tau;
+                if (first_only) {
+                    r.toi = limit;
+                    return r;
+                }
+                done = true;
+            } else {
+                tau += (d - clearance) / speed;
+                done = tau >= limit;
+            }
+        }
+        if (!done) {
+            // Out of advances before a verdict: taken as a contact where the search stopped.
+            r.hit = true;
+            r.exhausted = true;
+            limit = tau;
+            if (first_only) {
+                r.toi = limit;
                 return r;
             }
         }
-        if (tau >= 1.0 || speed <= 0.0) {
-            r.toi = 1.0;
-            return r;
-        }
-        tau = std::min(1.0, tau + (d - clearance) / speed);
     }
-    r.hit = true;
-    r.exhausted = true;
-    r.toi = tau;
+    r.toi = limit;
     return r;
 }
 

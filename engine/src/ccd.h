@@ -20,30 +20,25 @@ struct NearTriangle {
     // A lower bound on the distance between the piece and the triangle at the pose the list was
     // made for (from the piece's bounding capsules; -infinity when it has none).
     double lower_m = -1e300;
-    // The separating-axis separation of the piece and the triangle at that pose, once the step
-    // has needed it (NaN before): along a fixed axis no point moving by d changes it by more than
-    // d, so it bounds the separation at any nearby pose.
+    // A lower bound on the separation of the piece and the triangle at that pose (their distance
+    // when apart, from GJK, or the separating-axis overlap when they touch), once the step has
+    // needed it (NaN before): no point moving by d changes the separation by more than d, so it
+    // bounds the separation at any nearby pose.
     double separation_m = std::numeric_limits<double>::quiet_NaN();
-};
-
-struct CcdScratch {
-    Vec3* vertices;     // tool vertex count
-    Vec3* normals;      // tool face count
-    double* offsets;    // tool face count
-    Quat* rotation;     // the rotation the planes are placed with
-    Vec3* capsule;      // (kToolCapsules + 1) per piece: the bounding capsules' axis points at that pose
 };
 
 struct CcdResult {
     bool hit = false;   // the tool comes within `clearance` of a triangle
     double toi = 1.0;   // motion parameter of the first such pose (1 when none)
-    int iterations = 0;
-    int tests = 0;      // triangle tests made
+    int iterations = 0;  // most advances any one triangle needed
+    int tests = 0;       // triangle tests made
     bool exhausted = false;  // iteration cap reached before a verdict (treated as a hit)
 };
 
+// `max_iterations` advances per triangle. With `first_only`, stops at the first contact found
+// (its time is then a contact's, not necessarily the first).
 CcdResult conservative_advancement(const Model& model, const Pose& base, const double x[6], double clearance,
                                    const NearTriangle* near, int near_count, int max_iterations,
-                                   const CcdScratch& scratch);
+                                   bool first_only = false);
 
 }  // namespace sulcus

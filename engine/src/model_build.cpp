@@ -134,6 +134,14 @@ std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
             tool.edge_normals.push_back({topo.triangle_normals[e.tri[0]], topo.triangle_normals[e.tri[1]]});
         }
     piece.edge_count = uint32_t(tool.edges.size()) - piece.edge_begin;
+    {
+        // Each edge as a flat triangle (its box is the edge's).
+        TriMesh segments;
+        segments.vertices = mesh.vertices;
+        for (uint32_t e = piece.edge_begin; e < piece.edge_begin + piece.edge_count; ++e)
+            segments.triangles.push_back({tool.piece_edges[e][0], tool.piece_edges[e][1], tool.piece_edges[e][1]});
+        piece.edge_bvh = Bvh(segments, 2);
+    }
     for (const Vec3& v : mesh.vertices) {
         tool.mesh.vertices.push_back(v);
         tool.vertex_piece.push_back(uint8_t(index));

@@ -72,6 +72,8 @@ double micros(Clock::time_point a, Clock::time_point b) {
 
 constexpr int kMaxToolVertices = 4096;
 constexpr int kMaxToolFaces = 4096;
+constexpr int kMaxToolEdges = 3 * kMaxToolVertices;
+static_assert(kToolCapsules <= 16, "Bvh::query_capsule_chain takes at most 16 capsules");
 constexpr int kMaxNear = 8192;
 constexpr int kMaxAtoms = 1024;
 constexpr int kMaxFeatures = 4096;
@@ -166,6 +168,9 @@ struct CandidateResult {
 struct Workspace {
     Vec3 tool_world[kMaxToolVertices];
     Vec3 tool_moved[kMaxToolVertices];
+    Vec3 edge_mid[kMaxToolEdges];  // the tool's edges placed (gather): midpoint and half length
+    double edge_half[kMaxToolEdges];
+    uint32_t edge_hits[kMaxToolEdges];  // tool edges near one object edge
     Vec3 face_n[kMaxToolFaces];
     double face_d[kMaxToolFaces];
     Quat face_q{1.0, 0.0, 0.0, 0.0};  // the rotation face_n was placed with
@@ -249,15 +254,17 @@ double capsule_triangle_lower(const Vec3& p0, const Vec3& p1, double r, const Ve
 // detect: the triangles each piece of the tool can reach within the box [lower, upper] of the
 // step's coordinates, each with a lower bound on its distance from the piece (for the guard).
 // Against a rigid object a long piece (a probe's tip or shank) is bounded by its capsules: the BVH
-// is walked along each capsule, and a triangle is kept only when its distance bound to some
-// capsule is within how far that piece can move -- so a tilted probe does not collect the whole
-// surface inside its box, and nothing it could touch is left out. A compliant object (which the
-// tool enters) gives the triangles whose boxes meet the piece's box inflated by the tool's reach
-// `reach_all`: gather_atoms looks among them for the face that holds a tool vertex inside it. A
-// compact piece takes the triangles in its box inflated by its reach. Needs the tool's planes
-// and capsules at the same pose (set_tool_planes). False on overflow.
+// is walked along the chain of capsules, and a triangle is kept only when its distance bound to
+// some capsule, and then its distance to the piece itself (GJK), are within how far that piece
+// can move -- so a tilted probe does not collect the whole surface inside its box, nor the
+// triangles its capsules' roundness comes near, and nothing it could touch is left out. A
+// compliant object (which the tool enters) gives the triangles whose boxes meet the piece's box
+// inflated by the tool's reach `reach_all`: gather_atoms looks among them for the face that holds
+// a tool vertex inside it. A compact piece takes the triangles in its box inflated by its reach.
+// With `any_only`, stops at the first triangle kept. Needs the tool's planes and capsules at the
+// same pose (set_tool_planes). False on overflow.
 bool gather_near(const Model& model, const Vec3* tool_world, const double lower[6], const double upper[6],
-                 double reach_all, Workspace& w) {
+                 double reach_all, Workspace& w, bool any_only = false) {
     w.near_count = 0;
     bool overflow = false;
     auto push = [&](const NearTri& nt) {
@@ -266,7 +273,7 @@ bool gather_near(const Model& model, const Vec3* tool_world, const double lower[
             return false;
         }
         w.near[w.near_count++] = nt;
-        return true;
+        return !any_only;
     };
     for (size_t k = 0; k < model.tool.pieces.size(); ++k) {
         const ToolPiece& piece = model.tool.pieces[k];
@@ -295,27 +302,47 @@ bool gather_near(const Model& model, const Vec3* tool_world, const double lower[
                     return push(NearTri{ok, tri, pk, bound});
                 });
                 if (overflow) return false;
+                if (any_only && w.near_count > 0) return true;
                 continue;
             }
-            const int first = w.near_count;
-            for (int c = 0; c < piece.capsule_count; ++c) {
-                const double r = piece.capsule_radii_m[size_t(c)];
-                obj.bvh.query_capsule(axis[c], axis[c + 1], r + reach, [&](uint32_t tri) {
-                    const auto& t = obj.mesh.triangles[tri];
-                    const double bound = capsule_triangle_lower(axis[c], axis[c + 1], r, obj.mesh.vertices[t[0]],
-                                                                obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]], reach);
-                    return bound > reach || push(NearTri{ok, tri, pk, bound});
-                });
-                if (overflow) return false;
-            }
-            // A triangle near two capsules was listed twice: once, with the lesser bound.
-            std::sort(w.near + first, w.near + w.near_count, [](const NearTri& a, const NearTri& b) {
-                return a.tri < b.tri || (a.tri == b.tri && a.lower_m < b.lower_m);
+            // Along the piece's capsules; a triangle within reach of their bound is kept only when
+            // GJK finds it within reach of the piece itself. Its distance there is the start
+            // separation the guard needs.
+            const ConvexView view = tool_view(model, k, tool_world, w);
+            obj.bvh.query_capsule_chain(axis, piece.capsule_radii_m.data(), piece.capsule_count, reach, [&](uint32_t tri) {
+                const auto& t = obj.mesh.triangles[tri];
+                const Vec3 &a = obj.mesh.vertices[t[0]], &b = obj.mesh.vertices[t[1]], &c = obj.mesh.vertices[t[2]];
+                double bound = 1e300;
+                int nearest = 0;
+                const Vec3& n = obj.topology.triangle_normals[tri];
+                for (int j = 0; j < piece.capsule_count; ++j) {
+                    const double r = piece.capsule_radii_m[size_t(j)];
+                    double bj = capsule_triangle_lower(axis[j], axis[j + 1], r, a, b, c, 1e300);
+                    // An axis wholly on one side of the triangle's plane is at least its nearer
+                    // end's height from the triangle.
+                    const double h0 = glm::dot(n, axis[j] - a), h1 = glm::dot(n, axis[j + 1] - a);
+                    if (h0 * h1 > 0.0) bj = std::max(bj, std::min(std::abs(h0), std::abs(h1)) - r);
+                    if (bj < bound) {
+                        bound = bj;
+                        nearest = j;
+                    }
+                }
+                if (bound > reach) return true;
+                // GJK starts along the line from the triangle to the nearest capsule's axis.
+                const Vec3 centre = (a + b + c) / 3.0, d = axis[nearest + 1] - axis[nearest];
+                const double dd = glm::dot(d, d);
+                const double s = dd > 0.0 ? std::clamp(glm::dot(centre - axis[nearest], d) / dd, 0.0, 1.0) : 0.0;
+                const Vec3 hint = axis[nearest] + s * d - centre;
+                // To a tenth of the constraint tolerance: enough for the guard's bound.
+                const DistanceBounds g =
+                    convex_triangle_distance(view, a, b, c, reach, 0.1 * model.settings.constraint_tol_m, 64, &hint);
+                if (g.lower > reach) return true;
+                NearTri nt{ok, tri, pk, std::max(bound, g.lower)};
+                if (g.lower > 0.0) nt.separation_m = g.lower;
+                return push(nt);
             });
-            int out = first;
-            for (int i = first; i < w.near_count; ++i)
-                if (out == first || w.near[out - 1].tri != w.near[i].tri) w.near[out++] = w.near[i];
-            w.near_count = out;
+            if (overflow) return false;
+            if (any_only && w.near_count > 0) return true;
         }
     }
     return true;
@@ -324,11 +351,8 @@ bool gather_near(const Model& model, const Vec3* tool_world, const double lower[
 // detect, free motion: true when the whole motion stays farther than `clearance` from every
 // triangle in reach.
 bool motion_is_free(const Model& model, const Pose& base, const double x[6], double clearance, Workspace& w) {
-    const CcdScratch scratch{w.tool_moved, w.face_n, w.face_d, &w.face_q, w.capsule};
-    const CcdResult r = conservative_advancement(model, base, x, clearance, w.near, w.near_count,
-                                                 kMaxCcdIterations, scratch);
-    // The scratch planes held the moving tool; restore the start pose's planes.
-    set_tool_planes(model, base.orientation, base.position, w);
+    const CcdResult r =
+        conservative_advancement(model, base, x, clearance, w.near, w.near_count, kMaxCcdIterations, true);
     w.tests += r.tests;
     return !r.hit;
 }
@@ -416,8 +440,9 @@ bool in_vertex_cone(const ModelObject& obj, uint32_t v, const Vec3& p) {
 
 // gather: the principal-contact atoms of every feature pair within `reach`. The tool may be up to
 // `soft` inside a compliant object: its features stay in play that far behind their surface.
-void gather_atoms(const Model& model, double reach, double soft, const Vec3& push, Workspace& w) {
+void gather_atoms(const Model& model, const Pose& base, double reach, double soft, const Vec3& push, Workspace& w) {
     const ModelTool& tool = model.tool;
+    const Quat base_inv = glm::conjugate(base.orientation);
     auto back_of = [&](const ModelObject& o) { return o.compliant ? kBackFace + soft : kBackFace; };
     auto reach_of = [&](const ModelObject& o) { return o.compliant ? reach + soft : reach; };
     // Whether a constraint normal points within 60 degrees of the push (true without a push).
@@ -636,6 +661,12 @@ void gather_atoms(const Model& model, double reach, double soft, const Vec3& pus
     }
 
     // Tool edges against convex object edges (E-E, Type 2) on the dynamic plane of eq. 7.
+    for (size_t te = 0; te < tool.edges.size(); ++te) {
+        const Vec3& a0 = w.tool_world[tool.edges[te][0]];
+        const Vec3& a1 = w.tool_world[tool.edges[te][1]];
+        w.edge_mid[te] = 0.5 * (a0 + a1);
+        w.edge_half[te] = 0.5 * glm::length(a1 - a0);
+    }
     std::sort(w.oedges, w.oedges + w.oedge_count);
     w.oedge_count = static_cast<int>(std::unique(w.oedges, w.oedges + w.oedge_count) - w.oedges);
     for (int i = 0; i < w.oedge_count; ++i) {
@@ -647,16 +678,39 @@ void gather_atoms(const Model& model, double reach, double soft, const Vec3& pus
         const Vec3 eo = v1 - v0;
         const Vec3 bisector = obj.topology.triangle_normals[e.tri[0]] + obj.topology.triangle_normals[e.tri[1]];
         const ToolPiece& piece = tool.pieces[w.oedges[i].piece];
+        // The tool edges whose boxes come within reach of the object edge's, in the tool's frame
+        // (with room for the rounding of the move into it), in their order.
+        Aabb local;
+        local.grow(base_inv * (v0 - base.position));
+        local.grow(base_inv * (v1 - base.position));
+        local.inflate(reach_of(obj) + 1e-12);
+        int hits = 0;
+        piece.edge_bvh.query(local, [&](uint32_t e) {
+            w.edge_hits[hits++] = piece.edge_begin + e;
+            return true;
+        });
+        std::sort(w.edge_hits, w.edge_hits + hits);
         // Two segments are no closer than their midpoints' distance less both half lengths: a
         // cheap bound that skips the tool edges out of reach before the exact closest points.
         const Vec3 mid_o = 0.5 * (v0 + v1);
         const double half_o = 0.5 * glm::length(eo);
-        for (size_t te = piece.edge_begin; te < piece.edge_begin + piece.edge_count; ++te) {
+        const double near_o = reach_of(obj) + half_o;
+        for (int h = 0; h < hits; ++h) {
+            const uint32_t te = w.edge_hits[h];
+            const double bound = near_o + w.edge_half[te];
+            const Vec3 between = w.edge_mid[te] - mid_o;
+            if (glm::dot(between, between) > bound * bound) continue;
             const Vec3& a0 = w.tool_world[tool.edges[te][0]];
             const Vec3& a1 = w.tool_world[tool.edges[te][1]];
-            const double bound = reach_of(obj) + half_o + 0.5 * glm::length(a1 - a0);
-            const Vec3 between = 0.5 * (a0 + a1) - mid_o;
-            if (glm::dot(between, between) > bound * bound) continue;
+            // Tighter for a long tool edge: the object edge's midpoint's distance to it, less
+            // the object edge's half length.
+            {
+                const Vec3 et = a1 - a0, off = mid_o - a0;
+                const double ee = glm::dot(et, et);
+                const double s = ee > 0.0 ? std::clamp(glm::dot(off, et) / ee, 0.0, 1.0) : 0.0;
+                const Vec3 gap = off - s * et;
+                if (glm::dot(gap, gap) > near_o * near_o) continue;
+            }
             const SegmentClosest sc = closest_segments(a0, a1, v0, v1);
             if (sc.distance > reach_of(obj)) continue;
             if (sc.s <= 1e-9 || sc.s >= 1.0 - 1e-9 || sc.t <= 1e-9 || sc.t >= 1.0 - 1e-9) continue;
@@ -1103,8 +1157,12 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             ++w.tests;
             const ModelObject& obj = model.objects[nt.object];
             const auto& t = obj.mesh.triangles[nt.tri];
-            nt.separation_m = separate_convex_triangle(tool_view(model, nt.piece, w.tool_world, w), obj.mesh.vertices[t[0]],
-                                                       obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]).separation;
+            const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
+            // GJK's distance when they are apart (a bound as good as the separation, cheaper);
+            // the separating-axis overlap when they touch.
+            const ConvexView view = tool_view(model, nt.piece, w.tool_world, w);
+            const double apart = convex_triangle_distance(view, t0, t1, t2, moved_by).lower;
+            nt.separation_m = apart > 0.0 ? apart : separate_convex_triangle(view, t0, t1, t2).separation;
         }
         place_tool_vertices(model.tool, nx.q, nx.p, w.tool_moved);
         set_tool_planes(model, nx.q, nx.p, w);
@@ -1406,7 +1464,8 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     if (!state.initialized) state = make_state(haptic);
     // ---- detect ----
     const size_t nv = model.tool.mesh.vertices.size();
-    if (nv > static_cast<size_t>(kMaxToolVertices) || model.tool.face_normals.size() > static_cast<size_t>(kMaxToolFaces)) {
+    if (nv > static_cast<size_t>(kMaxToolVertices) || model.tool.face_normals.size() > static_cast<size_t>(kMaxToolFaces) ||
+        model.tool.edges.size() > static_cast<size_t>(kMaxToolEdges)) {
         res.graphic = state.graphic;
         res.status = StepStatus::Held;
         compute_wrench(S.haptic, state.graphic, haptic, res.force_N, res.torque_Nm);
@@ -1479,7 +1538,9 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                     straight_hi[j] = std::max(0.0, target_local[j]);
                 }
                 reach = box_reach(S, model.tool.radius_m, straight_lo, straight_hi);
-                if (!gather_near(model, w.tool_world, straight_lo, straight_hi, reach, w)) {
+                // In contact at the last tick, the tool moves freely only when nothing at all is
+                // in reach of the path: the first triangle found settles it.
+                if (!gather_near(model, w.tool_world, straight_lo, straight_hi, reach, w, state.active_count > 0)) {
                     scale *= 0.5;
                     stage_detect += micros(t0, Clock::now());
                     continue;
@@ -1507,7 +1568,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             stage_detect += micros(t0, t_detect_end);
 
             // ---- gather ----
-            gather_atoms(model, reach, model.any_compliant ? state.soft_depth_m + reach : 0.0, push, w);
+            gather_atoms(model, base, reach, model.any_compliant ? state.soft_depth_m + reach : 0.0, push, w);
             t_gather_end = Clock::now();
             stage_gather += micros(t_detect_end, t_gather_end);
             res.stats.atoms_gathered = w.atom_count;
@@ -1538,7 +1599,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                     scale *= 0.5;
                     continue;
                 }
-                gather_atoms(model, reach, model.any_compliant ? state.soft_depth_m + reach : 0.0, push, w);
+                gather_atoms(model, base, reach, model.any_compliant ? state.soft_depth_m + reach : 0.0, push, w);
                 solved = false;
                 for (int round = 0; round < 2 && !solved; ++round) {
                     const double recover = round == 0 ? 0.0 : 10.0 * S.constraint_tol_m;

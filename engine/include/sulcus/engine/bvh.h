@@ -27,12 +27,13 @@ public:
     template <class Visit>
     bool query(const Aabb& query, Visit&& visit) const;
 
-    // Calls visit(triangle_index) for the triangles that may lie within `radius` of segment
-    // p0-p1: every such triangle is visited (a box is passed over only when its bounding sphere is
-    // farther than `radius` from the segment, or its box misses the capsule's box); some farther
-    // ones may be too. Allocation-free; stops early when visit returns false.
+    // Calls visit(triangle_index) for the triangles that may lie within radii[k] + extra of
+    // segment points[k]-points[k + 1] for some k < count (a chain of capsules, count <= 16): every
+    // such triangle is visited, once (a box is passed over only when its bounding sphere is
+    // clear of every capsule, or it misses the box around them all); some farther ones may be too.
+    // Allocation-free; stops early when visit returns false.
     template <class Visit>
-    bool query_capsule(const Vec3& p0, const Vec3& p1, double radius, Visit&& visit) const;
+    bool query_capsule_chain(const Vec3* points, const double* radii, int count, double extra, Visit&& visit) const;
 
     const std::vector<Node>& nodes() const { return nodes_; }
     const std::vector<uint32_t>& order() const { return order_; }
@@ -82,25 +83,38 @@ bool Bvh::query(const Aabb& q, Visit&& visit) const {
 }
 
 template <class Visit>
-bool Bvh::query_capsule(const Vec3& p0, const Vec3& p1, double radius, Visit&& visit) const {
-    if (nodes_.empty()) return true;
+bool Bvh::query_capsule_chain(const Vec3* points, const double* radii, int count, double extra, Visit&& visit) const {
+    if (nodes_.empty() || count <= 0) return true;
+    constexpr int kMaxChain = 16;
+    count = count < kMaxChain ? count : kMaxChain;
     Aabb q;
-    q.grow(p0);
-    q.grow(p1);
-    q.inflate(radius);
-    const Vec3 d = p1 - p0;
-    const double dd = glm::dot(d, d);
+    Vec3 d[kMaxChain];
+    double dd[kMaxChain], r[kMaxChain];
+    for (int k = 0; k < count; ++k) {
+        r[k] = radii[k] + extra;
+        Aabb c;
+        c.grow(points[k]);
+        c.grow(points[k + 1]);
+        c.inflate(r[k]);
+        q.grow(c.lo);
+        q.grow(c.hi);
+        d[k] = points[k + 1] - points[k];
+        dd[k] = glm::dot(d[k], d[k]);
+    }
+    auto near_any = [&](const Aabb& b) {
+        for (int k = 0; k < count; ++k)
+            if (bvh_detail::box_near_segment(b, points[k], d[k], dd[k], r[k])) return true;
+        return false;
+    };
     uint32_t stack[kBvhMaxDepth + 2];
     int top = 0;
     stack[top++] = 0;
     while (top > 0) {
         const Node& n = nodes_[stack[--top]];
-        if (!n.box.overlaps(q) || !bvh_detail::box_near_segment(n.box, p0, d, dd, radius)) continue;
+        if (!n.box.overlaps(q) || !near_any(n.box)) continue;
         if (n.count > 0) {
             for (uint32_t i = n.first; i < n.first + n.count; ++i)
-                if (boxes_[i].overlaps(q) && bvh_detail::box_near_segment(boxes_[i], p0, d, dd, radius) &&
-                    !visit(order_[i]))
-                    return false;
+                if (boxes_[i].overlaps(q) && near_any(boxes_[i]) && !visit(order_[i])) return false;
         } else {
             stack[top++] = n.first + 1;
             stack[top++] = n.first;

@@ -119,6 +119,9 @@ struct ToolPiece {
     // no point of the piece further than radius_m * theta (a probe's tip, near the origin, far
     // less than its handle).
     double radius_m = 0.0;
+    // The piece's edges (ModelTool::edges from edge_begin) in a hierarchy of boxes, tool frame:
+    // finds the few tool edges near an object edge without looking at every one.
+    Bvh edge_bvh;
 };
 
 // The tool: a rigid union of closed convex pieces (the connected components of its mesh, which
