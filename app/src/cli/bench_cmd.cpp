@@ -21,7 +21,7 @@ namespace sulcus::cli {
 
 const char* const kHelpBench =
     "usage: sulcus-cli bench [SCENE...] [--json FILE] [--peer fcl] [--max-ticks N] [--list]\n"
-    "                        [--content-root DIR] [--cases DIR]\n"
+    "                        [--ticks DIR] [--check-every N] [--content-root DIR] [--cases DIR]\n"
     "\n"
     "Times the servo step over a fixed, deterministic set of scenes (the paper scenes, the\n"
     "bundled quadrant case probed at every site at full resolution, and a scripted session on it\n"
@@ -36,6 +36,9 @@ const char* const kHelpBench =
     "  --peer fcl       also time our proximity and collision queries against FCL's on the same\n"
     "                   meshes and poses (graphic poses of the run), as a time ratio\n"
     "  --max-ticks N    only the first N ticks of each scene (for profiling)\n"
+    "  --check-every N  the exact checks on every N-th tick with a force instead (0: none)\n"
+    "  --ticks DIR      also write each scene's ticks, one row per step with its status, stage\n"
+    "                   times and counters, to DIR/<scene>_ticks.csv (for finding the slow ticks)\n"
     "  --list           print the scene names and exit\n";
 
 namespace {
@@ -94,23 +97,47 @@ nlohmann::json peer_json(const std::string& scene, const PeerComparison& c) {
     return j;
 }
 
+// One row per tick: what the step did and how long each stage took.
+bool write_ticks_csv(const std::string& path, const BenchRun& run) {
+    std::FILE* f = std::fopen(path.c_str(), "w");
+    if (!f) return false;
+    std::fprintf(f, "tick,status,step_us,detect_us,gather_us,solve_us,select_us,force_us,triangles_near,"
+                    "triangles_tested,atoms_gathered,candidates,atoms,qp_solves,qp_iterations,relinearizations,"
+                    "passes,released,regions,soft_depth_m,allocations\n");
+    for (size_t i = 0; i < run.ticks.size(); ++i) {
+        const BenchTick& t = run.ticks[i];
+        const StepStats& s = t.stats;
+        std::fprintf(f, "%zu,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%.9g,%ld\n", i,
+                     to_string(t.status), t.step_us, s.times.detect_us, s.times.gather_us, s.times.solve_us,
+                     s.times.select_us, s.times.force_us, s.triangles_near, s.triangles_tested, s.atoms_gathered,
+                     s.candidates, s.atoms, s.qp_solves, s.qp_iterations, s.relinearizations, s.passes,
+                     int(s.released), s.regions, s.soft_depth_m, t.allocations);
+    }
+    return std::fclose(f) == 0;
+}
+
 }  // namespace
 
 int cmd_bench(const std::vector<std::string>& args) {
-    std::string json_path, peer, content_root, cases_dir;
+    std::string json_path, peer, content_root, cases_dir, ticks_dir;
     std::vector<std::string> names;
-    long max_ticks = 0;
+    long max_ticks = 0, check_every = 10;
     bool list = false;
     for (size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
-        if (a == "--json" || a == "--peer" || a == "--max-ticks" || a == "--content-root" || a == "--cases") {
+        if (a == "--json" || a == "--peer" || a == "--max-ticks" || a == "--content-root" || a == "--cases" ||
+            a == "--ticks" || a == "--check-every") {
             if (i + 1 >= args.size()) return usage("bench: " + a + " needs a value");
             const std::string& v = args[++i];
             if (a == "--json") json_path = v;
             else if (a == "--peer") peer = v;
             else if (a == "--content-root") content_root = v;
             else if (a == "--cases") cases_dir = v;
-            else if (!parse_whole(v, 1, LONG_MAX, &max_ticks))
+            else if (a == "--ticks") ticks_dir = v;
+            else if (a == "--check-every") {
+                if (!parse_whole(v, 0, INT_MAX, &check_every))
+                    return usage("bench: --check-every needs a whole number, not '" + v + "'");
+            } else if (!parse_whole(v, 1, LONG_MAX, &max_ticks))
                 return usage("bench: --max-ticks needs a positive whole number, not '" + v + "'");
         } else if (a == "--list") {
             list = true;
@@ -152,6 +179,7 @@ int cmd_bench(const std::vector<std::string>& args) {
         const BenchScene& b = loaded.scenes.front();
         BenchRunOptions opt;
         opt.max_ticks = max_ticks;
+        opt.check_every = int(check_every);
         const BenchRun run = run_bench(b, RendererSettings{}, opt);
         if (!run.error.empty()) {
             std::fprintf(stderr, "%s\n", run.error.c_str());
@@ -162,16 +190,16 @@ int cmd_bench(const std::vector<std::string>& args) {
         double tests = 0, cands = 0;
         for (const BenchTick& t : run.ticks) {
             times.push_back(t.step_us);
-            stage[0].push_back(t.stages.detect_us);
-            stage[1].push_back(t.stages.gather_us);
-            stage[2].push_back(t.stages.solve_us);
-            stage[3].push_back(t.stages.select_us);
-            stage[4].push_back(t.stages.force_us);
+            stage[0].push_back(t.stats.times.detect_us);
+            stage[1].push_back(t.stats.times.gather_us);
+            stage[2].push_back(t.stats.times.solve_us);
+            stage[3].push_back(t.stats.times.select_us);
+            stage[4].push_back(t.stats.times.force_us);
             allocations += t.allocations;
             contact += t.contact;
-            two_regions += t.regions >= 2;
-            tests += t.triangles_tested;
-            cands += t.candidates;
+            two_regions += t.stats.regions >= 2;
+            tests += t.stats.triangles_tested;
+            cands += t.stats.candidates;
         }
         const double steps = double(std::max<size_t>(1, run.ticks.size()));
         const Percentiles st = percentiles(times);
@@ -196,6 +224,13 @@ int cmd_bench(const std::vector<std::string>& args) {
                     run.ticks.size(), contact, st.median, st.p99, st.p999, st.max, double(allocations) / steps,
                     tests / steps, cands / steps, run.max_penetration_m);
         std::fflush(stdout);
+        if (!ticks_dir.empty()) {
+            const std::string path = ticks_dir + "/" + b.name + "_ticks.csv";
+            if (!write_ticks_csv(path, run)) {
+                std::fprintf(stderr, "sulcus-cli: bench: %s: cannot write the ticks\n", path.c_str());
+                return kUsage;
+            }
+        }
         if (!peer.empty()) {
             // The graphic poses of the run: where the tool really went, touching or near.
             std::vector<Pose> poses;

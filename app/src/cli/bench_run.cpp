@@ -42,13 +42,11 @@ BenchRun run_bench(const BenchScene& b, RendererSettings settings, const BenchRu
         BenchTick& t = run.ticks[i];
         t.allocations = thread_heap_allocations() - allocs;
         t.step_us = std::chrono::duration<double, std::micro>(t1 - t0).count();
-        t.stages = r.stats.times;
+        t.stats = r.stats;
+        t.status = r.status;
         t.graphic = r.graphic;
         t.force_N = r.force_N;
         t.torque_Nm = r.torque_Nm;
-        t.triangles_tested = r.stats.triangles_tested;
-        t.candidates = r.stats.candidates;
-        t.regions = r.stats.regions;
         t.contact = r.contacts > 0;
         const bool has_force = glm::length(r.force_N) > 0.0 || glm::length(r.torque_Nm) > 0.0;
         if (options.check_every > 0 && has_force && contact_ticks++ % options.check_every == 0) {

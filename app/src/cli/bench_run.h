@@ -15,14 +15,12 @@ namespace sulcus::cli {
 
 struct BenchTick {
     double step_us = 0.0;
-    StageTimes stages;
+    StepStats stats;  // the step's own figures: stage times, counters
+    StepStatus status = StepStatus::Free;
     Pose graphic;
     Vec3 force_N{0.0};
     Vec3 torque_Nm{0.0};
     long allocations = 0;
-    int triangles_tested = 0;
-    int candidates = 0;
-    int regions = 0;
     bool contact = false;
 };
 
