@@ -124,6 +124,32 @@ TEST_F(Bench, JsonHasTheDocumentedFieldsAndNoAllocations) {
     }
 }
 
+TEST_F(Bench, TicksCsvHasOneRowPerStepAndNoChecksWhenAskedNone) {
+    const fs::path ticks = dir / "ticks", file = dir / "bench.json";
+    fs::create_directories(ticks);
+    const Outcome o = run_cli("bench paper/cavity_1mm --check-every 0 --ticks " + ticks.string() + " --json " +
+                                  file.string(),
+                              dir);
+    ASSERT_EQ(o.status, 0) << o.err;
+    const json j = json::parse(read_text(file));
+    const json& s = j["scenes"][0];
+    EXPECT_EQ(s.value("checked_ticks", -1L), 0);
+    const std::vector<std::string> lines = split(read_text(ticks / "paper_cavity_1mm_ticks.csv"), '\n');
+    ASSERT_EQ(long(lines.size()), s.value("steps", 0L) + 1);
+    const std::vector<std::string> header = split(lines[0], ',');
+    for (const char* col : {"tick", "status", "step_us", "detect_us", "triangles_near", "candidates", "passes"})
+        EXPECT_NE(std::find(header.begin(), header.end(), col), header.end()) << col;
+    // Every row has every column, its tick index first, and the contact ticks the JSON counts.
+    long contact = 0;
+    for (size_t i = 1; i < lines.size(); ++i) {
+        const std::vector<std::string> row = split(lines[i], ',');
+        ASSERT_EQ(row.size(), header.size()) << lines[i];
+        EXPECT_EQ(row[0], std::to_string(i - 1));
+        contact += row[1] == "contact";
+    }
+    EXPECT_EQ(contact, s.value("contact_steps", -1L));
+}
+
 TEST_F(Bench, ListNamesTheFixedScenes) {
     const Outcome o = run_cli("bench --list", dir);
     ASSERT_EQ(o.status, 0) << o.err;
@@ -140,6 +166,8 @@ TEST_F(Bench, BadArgumentsExitTwoWithOneLine) {
     expect_bad("bench paper/cavity_0mm --max-ticks 0", "--max-ticks");
     expect_bad("bench paper/cavity_0mm --frobnicate", "--frobnicate");
     expect_bad("bench paper/cavity_0mm --peer nope", "nope");
+    expect_bad("bench paper/cavity_0mm --check-every x", "--check-every");
+    expect_bad("bench paper/cavity_0mm --ticks " + (dir / "no" / "such").string(), "cannot write");
 }
 
 TEST_F(Bench, PeerFclReportsARatio) {

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <climits>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <thread>
@@ -38,7 +39,8 @@ const char* const kHelpBench =
     "  --max-ticks N    only the first N ticks of each scene (for profiling)\n"
     "  --check-every N  the exact checks on every N-th tick with a force instead (0: none)\n"
     "  --ticks DIR      also write each scene's ticks, one row per step with its status, stage\n"
-    "                   times and counters, to DIR/<scene>_ticks.csv (for finding the slow ticks)\n"
+    "                   times and counters, to DIR/<scene>_ticks.csv ('/' in a name as '_'):\n"
+    "                   to find the slow ticks\n"
     "  --list           print the scene names and exit\n";
 
 namespace {
@@ -225,7 +227,7 @@ int cmd_bench(const std::vector<std::string>& args) {
                     tests / steps, cands / steps, run.max_penetration_m);
         std::fflush(stdout);
         if (!ticks_dir.empty()) {
-            const std::string path = ticks_dir + "/" + b.name + "_ticks.csv";
+            const std::string path = (std::filesystem::path(ticks_dir) / (scene_file_name(b.name) + "_ticks.csv")).string();
             if (!write_ticks_csv(path, run)) {
                 std::fprintf(stderr, "sulcus-cli: bench: %s: cannot write the ticks\n", path.c_str());
                 return kUsage;

@@ -178,6 +178,12 @@ std::vector<Pose> trajectory_ticks(const SceneFile& scene) {
     return ticks;
 }
 
+std::string scene_file_name(std::string name) {
+    for (char& c : name)
+        if (c == '/' || c == '\\' || c == ' ') c = '_';
+    return name;
+}
+
 std::vector<std::string> bench_scene_names() {
     std::vector<std::string> names;
     for (const std::string& n : paper_scene_names()) names.push_back("paper/" + n);

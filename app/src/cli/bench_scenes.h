@@ -28,6 +28,9 @@ struct BenchScenes {
 // The names of the fixed set, in the order they run (the paper scenes as content lists them).
 std::vector<std::string> bench_scene_names();
 
+// A scene's name as a file or folder name ("paper/cavity_0mm" -> "paper_cavity_0mm").
+std::string scene_file_name(std::string name);
+
 // Loads the named scenes (all of them when `names` is empty). `content_root` holds
 // scenes/paper/; `cases_dir` the built cases (build/cases).
 BenchScenes load_bench_scenes(const std::vector<std::string>& names, const std::string& content_root,

@@ -90,12 +90,6 @@ Percentiles step_times(const BenchRun& run) {
     return percentiles(t);
 }
 
-std::string safe_name(std::string s) {
-    for (char& c : s)
-        if (c == '/' || c == '\\' || c == ' ') c = '_';
-    return s;
-}
-
 // Zero errors have no place on a log axis: they are drawn at this floor (the CSV has the zeros).
 constexpr double kPlotFloor = 1e-15;
 
@@ -208,7 +202,7 @@ int cmd_wpd(const std::vector<std::string>& args) {
             }
             scene = std::move(loaded.scenes.front());
         }
-        const std::string dir = (std::filesystem::path(out_dir) / safe_name(scene.name)).string();
+        const std::string dir = (std::filesystem::path(out_dir) / scene_file_name(scene.name)).string();
         std::error_code ec;
         std::filesystem::create_directories(dir, ec);
         if (ec) {
