@@ -261,7 +261,7 @@ double capsule_triangle_lower(const Vec3& p0, const Vec3& p1, double r, const Ve
 // compliant object (which the tool enters) gives the triangles whose boxes meet the piece's box
 // inflated by the tool's reach `reach_all`: gather_atoms looks among them for the face that holds
 // a tool vertex inside it. A compact piece takes the triangles in its box inflated by its reach.
-// With `any_only`, stops at the first triangle kept. Needs the tool's planes and capsules at the
+// With `any_only`, stops at the first triangle the capsules' bound keeps. Needs the tool's planes and capsules at the
 // same pose (set_tool_planes). False on overflow.
 bool gather_near(const Model& model, const Vec3* tool_world, const double lower[6], const double upper[6],
                  double reach_all, Workspace& w, bool any_only = false) {
@@ -328,6 +328,8 @@ bool gather_near(const Model& model, const Vec3* tool_world, const double lower[
                     }
                 }
                 if (bound > reach) return true;
+                // Whether anything may be in reach: the capsules' word is enough.
+                if (any_only) return push(NearTri{ok, tri, pk, bound});
                 // GJK starts along the line from the triangle to the nearest capsule's axis.
                 const Vec3 centre = (a + b + c) / 3.0, d = axis[nearest + 1] - axis[nearest];
                 const double dd = glm::dot(d, d);
@@ -1177,7 +1179,8 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             const ModelObject& obj = model.objects[w.near[i].object];
             const auto& t = obj.mesh.triangles[w.near[i].tri];
             const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
-            if (capsule_lower_bound(moved, t0, t1, t2) > 0.0) continue;  // clear of the piece's capsules
+            // Apart (GJK finds a gap along some direction): nothing to measure.
+            if (convex_triangle_distance(moved, t0, t1, t2, std::numeric_limits<double>::min()).lower > 0.0) continue;
             const SatResult sat = separate_convex_triangle(moved, t0, t1, t2);
             const double give = triangle_zone_depth(model, w.slacks, w.near[i]);
             if (sat.separation < -(S.constraint_tol_m + give)) {
