@@ -12,24 +12,57 @@
 #include <random>
 
 namespace sulcus {
+
+namespace test_sat {
+
+// A one-piece tool's model and the piece placed at a pose: vertices, face planes, capsules.
+struct PlacedTool {
+    ModelBuild mb;
+    const ModelTool* tool = nullptr;
+    std::vector<Vec3> verts, normals;
+    std::vector<double> offsets;
+    Vec3 caps[kMaxToolPieces * (kToolCapsules + 1)];
+    Quat q{1.0, 0.0, 0.0, 0.0};
+
+    explicit PlacedTool(const TriMesh& mesh) : mb(build_model(mesh, {}, RendererSettings{})) {
+        if (!mb.model) return;
+        tool = &mb.model->tool;
+        verts.resize(tool->mesh.vertices.size());
+        normals.resize(tool->face_normals.size());
+        offsets.resize(tool->face_normals.size());
+    }
+    void place(const Quat& rotation, const Vec3& p) {
+        q = rotation;
+        place_tool_vertices(*tool, q, p, verts.data());
+        place_tool_planes(*tool, q, p, normals.data(), offsets.data());
+        place_tool_capsule(*tool, q, p, caps);
+    }
+    // The piece's view: with the rotation (the fast separating-axis test) or not, with the
+    // capsules or not.
+    ConvexView view(bool fast, bool capsules = false) const {
+        return tool_convex_view(*tool, 0, verts.data(), normals.data(), offsets.data(), fast ? &q : nullptr,
+                                capsules ? caps : nullptr);
+    }
+};
+
+}  // namespace test_sat
+
 namespace {
 
+using test_sat::PlacedTool;
+
 void compare_on(const TriMesh& tool_mesh, double scale, int trials, unsigned seed) {
-    const ModelBuild mb = build_model(tool_mesh, {}, RendererSettings{});
-    ASSERT_TRUE(mb.model) << mb.error;
-    const ModelTool& tool = mb.model->tool;
+    PlacedTool pt(tool_mesh);
+    ASSERT_TRUE(pt.mb.model) << pt.mb.error;
+    const std::vector<Vec3>& verts = pt.verts;
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
-    std::vector<Vec3> verts(tool.mesh.vertices.size()), normals(tool.face_normals.size());
-    std::vector<double> offsets(tool.face_normals.size());
     int overlapping = 0, separated = 0;
     for (int t = 0; t < trials; ++t) {
-        Quat q = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
-        const Vec3 p(u(rng) * scale * 0.2, u(rng) * scale * 0.2, u(rng) * scale * 0.2);
-        place_tool_vertices(tool, q, p, verts.data());
-        place_tool_planes(tool, q, p, normals.data(), offsets.data());
-        ConvexView slow = tool_convex_view(tool, 0, verts.data(), normals.data(), offsets.data(), nullptr);
-        ConvexView fast = tool_convex_view(tool, 0, verts.data(), normals.data(), offsets.data(), &q);
+        const Quat q = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+        pt.place(q, Vec3(u(rng) * scale * 0.2, u(rng) * scale * 0.2, u(rng) * scale * 0.2));
+        const ConvexView slow = pt.view(false);
+        const ConvexView fast = pt.view(true);
         // A triangle near the tool: around a random tool vertex.
         const Vec3 c = verts[size_t(rng() % verts.size())];
         const double s = scale * (0.05 + 0.5 * (u(rng) + 1.0));
@@ -66,24 +99,19 @@ namespace {
 
 // The capsule chain's lower bound never exceeds the exact distance (it only ever skips work).
 void capsule_bound_holds(const TriMesh& tool_mesh, double scale, unsigned seed) {
-    const ModelBuild mb = build_model(tool_mesh, {}, RendererSettings{});
-    ASSERT_TRUE(mb.model) << mb.error;
-    const ModelTool& tool = mb.model->tool;
+    PlacedTool pt(tool_mesh);
+    ASSERT_TRUE(pt.mb.model) << pt.mb.error;
+    const ModelTool& tool = *pt.tool;
+    const std::vector<Vec3>& verts = pt.verts;
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
-    std::vector<Vec3> verts(tool.mesh.vertices.size()), normals(tool.face_normals.size());
-    std::vector<double> offsets(tool.face_normals.size());
-    Vec3 caps[kMaxToolPieces * (kToolCapsules + 1)];
     const auto* tris = piece_triangles(tool, 0);
     int useful = 0;
     for (int t = 0; t < 3000; ++t) {
         const Quat q = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
-        const Vec3 p(u(rng) * scale, u(rng) * scale, u(rng) * scale);
-        place_tool_vertices(tool, q, p, verts.data());
-        place_tool_planes(tool, q, p, normals.data(), offsets.data());
-        place_tool_capsule(tool, q, p, caps);
-        const ConvexView with = tool_convex_view(tool, 0, verts.data(), normals.data(), offsets.data(), &q, caps);
-        const ConvexView without = tool_convex_view(tool, 0, verts.data(), normals.data(), offsets.data(), &q);
+        pt.place(q, Vec3(u(rng) * scale, u(rng) * scale, u(rng) * scale));
+        const ConvexView with = pt.view(true, true);
+        const ConvexView without = pt.view(true);
         const Vec3 c = verts[size_t(rng() % verts.size())] + 0.2 * scale * Vec3(u(rng), u(rng), u(rng));
         const double s = 0.3 * scale;
         const Vec3 a = c + s * Vec3(u(rng), u(rng), u(rng)), b = c + s * Vec3(u(rng), u(rng), u(rng)),
@@ -123,21 +151,20 @@ namespace {
 // GJK's bounds bracket the exact distance (triangles of the polytope against the triangle), meet
 // it within their tolerance, and say 0 exactly when the separating-axis test finds an overlap.
 void gjk_brackets_the_distance(const TriMesh& tool_mesh, double scale, unsigned seed) {
-    const ModelBuild mb = build_model(tool_mesh, {}, RendererSettings{});
-    ASSERT_TRUE(mb.model) << mb.error;
-    const ModelTool& tool = mb.model->tool;
+    PlacedTool pt(tool_mesh);
+    ASSERT_TRUE(pt.mb.model) << pt.mb.error;
+    const ModelTool& tool = *pt.tool;
+    const std::vector<Vec3>& verts = pt.verts;
+    const std::vector<Vec3>& normals = pt.normals;
+    const std::vector<double>& offsets = pt.offsets;
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
-    std::vector<Vec3> verts(tool.mesh.vertices.size()), normals(tool.face_normals.size());
-    std::vector<double> offsets(tool.face_normals.size());
     const auto* tris = piece_triangles(tool, 0);
     int separated = 0, overlapping = 0, touching_close = 0;
     for (int t = 0; t < 3000; ++t) {
         const Quat q = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
-        const Vec3 p(u(rng) * scale, u(rng) * scale, u(rng) * scale);
-        place_tool_vertices(tool, q, p, verts.data());
-        place_tool_planes(tool, q, p, normals.data(), offsets.data());
-        const ConvexView view = tool_convex_view(tool, 0, verts.data(), normals.data(), offsets.data(), &q);
+        pt.place(q, Vec3(u(rng) * scale, u(rng) * scale, u(rng) * scale));
+        const ConvexView view = pt.view(true);
         // Triangles of every size near a tool vertex, some lying on a tool face at a tiny gap.
         const Vec3 c = verts[size_t(rng() % verts.size())] + 0.2 * scale * Vec3(u(rng), u(rng), u(rng));
         const double s = scale * std::pow(10.0, -2.0 + 2.0 * (u(rng) + 1.0) / 2.0);

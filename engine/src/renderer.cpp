@@ -168,8 +168,6 @@ struct CandidateResult {
 struct Workspace {
     Vec3 tool_world[kMaxToolVertices];
     Vec3 tool_moved[kMaxToolVertices];
-    Vec3 edge_mid[kMaxToolEdges];  // the tool's edges placed (gather): midpoint and half length
-    double edge_half[kMaxToolEdges];
     uint32_t edge_hits[kMaxToolEdges];  // tool edges near one object edge
     Vec3 face_n[kMaxToolFaces];
     double face_d[kMaxToolFaces];
@@ -237,18 +235,15 @@ double box_reach(const RendererSettings& S, double tool_radius, const double low
 
 // A lower bound on the distance between capsule k (axis p0-p1, radius r) and triangle (a, b, e):
 // the triangle's bounding sphere against the capsule. Nearly exact for the small triangles of a
-// dense mesh; the exact segment distance when the sphere is wider than `exact_above`.
-double capsule_triangle_lower(const Vec3& p0, const Vec3& p1, double r, const Vec3& a, const Vec3& b, const Vec3& e,
-                              double exact_above) {
+// dense mesh.
+double capsule_triangle_lower(const Vec3& p0, const Vec3& p1, double r, const Vec3& a, const Vec3& b, const Vec3& e) {
     const Vec3 centre = (a + b + e) / 3.0;
     const double radius = std::sqrt(
         std::max({glm::dot(a - centre, a - centre), glm::dot(b - centre, b - centre), glm::dot(e - centre, e - centre)}));
     const Vec3 d = p1 - p0, off = centre - p0;
     const double dd = glm::dot(d, d);
     const double s = dd > 0.0 ? std::clamp(glm::dot(off, d) / dd, 0.0, 1.0) : 0.0;
-    const double lower = glm::length(off - s * d) - radius - r;
-    if (radius > exact_above) return std::max(lower, segment_triangle_distance(p0, p1, a, b, e) - r);
-    return lower;
+    return glm::length(off - s * d) - radius - r;
 }
 
 // detect: the triangles each piece of the tool can reach within the box [lower, upper] of the
@@ -297,7 +292,7 @@ bool gather_near(const Model& model, const Vec3* tool_world, const double lower[
                         for (int c = 0; c < piece.capsule_count; ++c)
                             bound = std::min(bound, capsule_triangle_lower(axis[c], axis[c + 1], piece.capsule_radii_m[size_t(c)],
                                                                            obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
-                                                                           obj.mesh.vertices[t[2]], 1e300));
+                                                                           obj.mesh.vertices[t[2]]));
                     }
                     return push(NearTri{ok, tri, pk, bound});
                 });
@@ -317,7 +312,7 @@ bool gather_near(const Model& model, const Vec3* tool_world, const double lower[
                 const Vec3& n = obj.topology.triangle_normals[tri];
                 for (int j = 0; j < piece.capsule_count; ++j) {
                     const double r = piece.capsule_radii_m[size_t(j)];
-                    double bj = capsule_triangle_lower(axis[j], axis[j + 1], r, a, b, c, 1e300);
+                    double bj = capsule_triangle_lower(axis[j], axis[j + 1], r, a, b, c);
                     // An axis wholly on one side of the triangle's plane is at least its nearer
                     // end's height from the triangle.
                     const double h0 = glm::dot(n, axis[j] - a), h1 = glm::dot(n, axis[j + 1] - a);
@@ -663,12 +658,6 @@ void gather_atoms(const Model& model, const Pose& base, double reach, double sof
     }
 
     // Tool edges against convex object edges (E-E, Type 2) on the dynamic plane of eq. 7.
-    for (size_t te = 0; te < tool.edges.size(); ++te) {
-        const Vec3& a0 = w.tool_world[tool.edges[te][0]];
-        const Vec3& a1 = w.tool_world[tool.edges[te][1]];
-        w.edge_mid[te] = 0.5 * (a0 + a1);
-        w.edge_half[te] = 0.5 * glm::length(a1 - a0);
-    }
     std::sort(w.oedges, w.oedges + w.oedge_count);
     w.oedge_count = static_cast<int>(std::unique(w.oedges, w.oedges + w.oedge_count) - w.oedges);
     for (int i = 0; i < w.oedge_count; ++i) {
@@ -692,31 +681,22 @@ void gather_atoms(const Model& model, const Pose& base, double reach, double sof
             return true;
         });
         std::sort(w.edge_hits, w.edge_hits + hits);
-        // Two segments are no closer than their midpoints' distance less both half lengths: a
-        // cheap bound that skips the tool edges out of reach before the exact closest points.
+        // A segment is no closer to the tool edge than the distance from its midpoint less its
+        // half length: a cheap bound before the exact closest points.
         const Vec3 mid_o = 0.5 * (v0 + v1);
-        const double half_o = 0.5 * glm::length(eo);
-        const double near_o = reach_of(obj) + half_o;
+        const double near_o = reach_of(obj) + 0.5 * glm::length(eo);
         for (int h = 0; h < hits; ++h) {
             const uint32_t te = w.edge_hits[h];
-            const double bound = near_o + w.edge_half[te];
-            const Vec3 between = w.edge_mid[te] - mid_o;
-            if (glm::dot(between, between) > bound * bound) continue;
             const Vec3& a0 = w.tool_world[tool.edges[te][0]];
             const Vec3& a1 = w.tool_world[tool.edges[te][1]];
-            // Tighter for a long tool edge: the object edge's midpoint's distance to it, less
-            // the object edge's half length.
-            {
-                const Vec3 et = a1 - a0, off = mid_o - a0;
-                const double ee = glm::dot(et, et);
-                const double s = ee > 0.0 ? std::clamp(glm::dot(off, et) / ee, 0.0, 1.0) : 0.0;
-                const Vec3 gap = off - s * et;
-                if (glm::dot(gap, gap) > near_o * near_o) continue;
-            }
+            const Vec3 et = a1 - a0, off = mid_o - a0;
+            const double ee = glm::dot(et, et);
+            const double along = ee > 0.0 ? std::clamp(glm::dot(off, et) / ee, 0.0, 1.0) : 0.0;
+            const Vec3 gap = off - along * et;
+            if (glm::dot(gap, gap) > near_o * near_o) continue;
             const SegmentClosest sc = closest_segments(a0, a1, v0, v1);
             if (sc.distance > reach_of(obj)) continue;
             if (sc.s <= 1e-9 || sc.s >= 1.0 - 1e-9 || sc.t <= 1e-9 || sc.t >= 1.0 - 1e-9) continue;
-            const Vec3 et = a1 - a0;
             const Vec3 u = glm::cross(eo, et);
             const double ul = glm::length(u);
             // Near-parallel edges: the plane of eq. 7 is undefined; the vertices' atoms hold.

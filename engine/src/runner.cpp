@@ -85,7 +85,7 @@ RunResult run_scene(const SceneFile& scene, const RendererSettings& settings_in)
         step(model, scratch, start);
     }
     run.ticks.reserve(static_cast<size_t>(n));
-    std::vector<double> times, stage[5];
+    std::vector<double> times, stage[kStageCount];
     times.reserve(static_cast<size_t>(n));
     RunSummary& s = run.summary;
     Vec3 prev_f(0.0), prev_tq(0.0);
@@ -139,15 +139,11 @@ RunResult run_scene(const SceneFile& scene, const RendererSettings& settings_in)
         s.qp_solves += out.stats.qp_solves;
         s.max_relinearizations = std::max<long>(s.max_relinearizations, out.stats.relinearizations);
         times.push_back(r.step_us);
-        stage[0].push_back(out.stats.times.detect_us);
-        stage[1].push_back(out.stats.times.gather_us);
-        stage[2].push_back(out.stats.times.solve_us);
-        stage[3].push_back(out.stats.times.select_us);
-        stage[4].push_back(out.stats.times.force_us);
+        for (int k = 0; k < kStageCount; ++k) stage[k].push_back(stage_us(out.stats.times, k));
         run.ticks.push_back(r);
     }
     s.step_time_us = percentiles(times);
-    for (int k = 0; k < 5; ++k) s.stage_us[k] = percentiles(stage[k]);
+    for (int k = 0; k < kStageCount; ++k) s.stage_us[k] = percentiles(stage[k]);
     return run;
 }
 
@@ -213,8 +209,7 @@ bool write_run(const RunResult& run, const std::string& dir, std::string* error)
     j["max_force_step_N"] = s.max_force_step_N;
     j["max_torque_step_Nm"] = s.max_torque_step_Nm;
     j["step_time_us"] = to_json(s.step_time_us);
-    const char* names[5] = {"detect", "gather", "solve", "select", "force"};
-    for (int k = 0; k < 5; ++k) j["stage_time_us"][names[k]] = to_json(s.stage_us[k]);
+    for (int k = 0; k < kStageCount; ++k) j["stage_time_us"][kStageNames[k]] = to_json(s.stage_us[k]);
     j["nan_steps"] = s.nan_steps;
     for (int k = 0; k < kStepStatusCount; ++k) j["status_counts"][to_string(static_cast<StepStatus>(k))] = s.status_counts[k];
     j["contact_types"] = {{"steps_with_vertex_face", s.steps_with_vf},

@@ -187,16 +187,12 @@ int cmd_bench(const std::vector<std::string>& args) {
             std::fprintf(stderr, "%s\n", run.error.c_str());
             return kUsage;
         }
-        std::vector<double> times, stage[5];
+        std::vector<double> times, stage[kStageCount];
         long allocations = 0, contact = 0, two_regions = 0;
         double tests = 0, cands = 0;
         for (const BenchTick& t : run.ticks) {
             times.push_back(t.step_us);
-            stage[0].push_back(t.stats.times.detect_us);
-            stage[1].push_back(t.stats.times.gather_us);
-            stage[2].push_back(t.stats.times.solve_us);
-            stage[3].push_back(t.stats.times.select_us);
-            stage[4].push_back(t.stats.times.force_us);
+            for (int k = 0; k < kStageCount; ++k) stage[k].push_back(stage_us(t.stats.times, k));
             allocations += t.allocations;
             contact += t.contact;
             two_regions += t.stats.regions >= 2;
@@ -205,9 +201,8 @@ int cmd_bench(const std::vector<std::string>& args) {
         }
         const double steps = double(std::max<size_t>(1, run.ticks.size()));
         const Percentiles st = percentiles(times);
-        static const char* kStages[5] = {"detect", "gather", "solve", "select", "force"};
         nlohmann::json stages;
-        for (int k = 0; k < 5; ++k) stages[kStages[k]] = pct_json(percentiles(stage[k]), false);
+        for (int k = 0; k < kStageCount; ++k) stages[kStageNames[k]] = pct_json(percentiles(stage[k]), false);
         out["scenes"].push_back({{"name", b.name},
                                  {"triangles", b.triangles},
                                  {"steps", run.ticks.size()},

@@ -227,6 +227,14 @@ struct StageTimes {
     double detect_us = 0, gather_us = 0, solve_us = 0, select_us = 0, force_us = 0;
 };
 
+// The stages by number, in the order of the step, for tables and reports.
+inline constexpr int kStageCount = 5;
+inline constexpr const char* kStageNames[kStageCount] = {"detect", "gather", "solve", "select", "force"};
+inline double stage_us(const StageTimes& t, int k) {
+    const double v[kStageCount] = {t.detect_us, t.gather_us, t.solve_us, t.select_us, t.force_us};
+    return v[k];
+}
+
 struct StepStats {
     StageTimes times;
     int triangles_near = 0;     // triangles within reach of this tick's motion (detect)

@@ -43,7 +43,7 @@ struct RunSummary {
     double max_force_step_N = 0.0;
     double max_torque_step_Nm = 0.0;
     Percentiles step_time_us;
-    Percentiles stage_us[5];  // detect, gather, solve, select, force
+    Percentiles stage_us[kStageCount];  // by stage, as kStageNames
     long nan_steps = 0;
     long status_counts[kStepStatusCount] = {};
     long max_regions = 0;
