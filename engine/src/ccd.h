@@ -25,6 +25,9 @@ struct NearTriangle {
     // needed it (NaN before): no point moving by d changes the separation by more than d, so it
     // bounds the separation at any nearby pose.
     double separation_m = std::numeric_limits<double>::quiet_NaN();
+    // Roughly the direction from the triangle towards the piece (world; zero when unknown): where
+    // a distance search between them starts.
+    Vec3 direction{0.0};
 };
 
 struct CcdResult {

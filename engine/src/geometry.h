@@ -78,6 +78,9 @@ struct DistanceBounds {
     double lower = 0.0;
     double upper = 1e300;
     int iterations = 0;
+    // The last search direction (from the triangle towards the polytope; zero when they touch):
+    // a good hint for the same pair at a nearby pose.
+    Vec3 direction{0.0};
 };
 // `hint`, when given, is a direction roughly from the triangle towards the polytope: the search
 // starts there.

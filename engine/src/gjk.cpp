@@ -144,6 +144,7 @@ DistanceBounds distance_bounds(const Vec3* poly, int count, const Vec3& a, const
         // The gap along the hint itself.
         lower = std::max(0.0, glm::dot(*hint, s.p[0]) / glm::length(*hint));
         r.lower = lower;
+        r.direction = *hint;
         if (lower >= cutoff) return r;
     }
     for (int it = 0; it < max_iterations; ++it) {
@@ -151,6 +152,7 @@ DistanceBounds distance_bounds(const Vec3* poly, int count, const Vec3& a, const
         const double vv = glm::dot(v, v);
         if (vv == 0.0) {
             r.lower = r.upper = 0.0;
+            r.direction = Vec3(0.0);
             return r;
         }
         const double vl = std::sqrt(vv);
@@ -159,6 +161,7 @@ DistanceBounds distance_bounds(const Vec3* poly, int count, const Vec3& a, const
         lower = std::max(lower, glm::dot(v, w) / vl);
         r.lower = lower;
         r.upper = vl;
+        r.direction = v;
         if (lower >= cutoff || vl - lower <= tolerance) return r;
         // w adds nothing the simplex has: no further progress is possible.
         bool known = false;
@@ -175,6 +178,7 @@ DistanceBounds distance_bounds(const Vec3* poly, int count, const Vec3& a, const
             next = closest_tetrahedron(s, inside);
             if (inside) {
                 r.lower = r.upper = 0.0;
+                r.direction = Vec3(0.0);
                 return r;
             }
         }

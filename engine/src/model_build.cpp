@@ -5,6 +5,7 @@
 #include "geometry.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -259,6 +260,8 @@ ModelBuild build_model(const TriMesh& tool_mesh, const std::vector<SceneObject>&
     }
     auto model = std::make_unique<Model>();
     model->settings = settings;
+    static std::atomic<uint64_t> serials{0};
+    model->serial = ++serials;
     if (std::string err = build_tool(tool_mesh, model->tool); !err.empty()) {
         out.error = "tool: " + err;
         return out;

@@ -22,11 +22,13 @@
 
 #include "ccd.h"
 #include "contact_atoms.h"
+#include "near_cache.h"
 #include "geometry.h"
 #include "so3.h"
 #include "tool_placement.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -46,7 +48,9 @@ const char* to_string(StepStatus s) {
 }
 
 State make_state(const Pose& pose) {
+    static std::atomic<uint64_t> sessions{0};
     State s;
+    s.session = ++sessions;
     s.graphic = pose;
     s.graphic.orientation = glm::normalize(pose.orientation);
     s.last_haptic = s.graphic;
@@ -207,6 +211,7 @@ struct Workspace {
     qp::Problem problem;
     qp::Solution solution;
     qp::WarmStart warm;
+    NearCache cache;
 };
 
 Workspace& workspace() {
@@ -246,20 +251,134 @@ double capsule_triangle_lower(const Vec3& p0, const Vec3& p1, double r, const Ve
     return glm::length(off - s * d) - radius - r;
 }
 
+// A lower bound on the distance between a piece with capsules and triangle (a, b, c) of normal n:
+// the least over its capsules of the bounding-sphere bound, raised where a capsule's axis lies
+// wholly on one side of the triangle's plane to its nearer end's height. `nearest` receives the
+// capsule that gave it.
+double piece_capsule_bound(const ToolPiece& piece, const Vec3* axis, const Vec3& a, const Vec3& b, const Vec3& c,
+                           const Vec3& n, int& nearest) {
+    double bound = 1e300;
+    nearest = 0;
+    for (int j = 0; j < piece.capsule_count; ++j) {
+        const double r = piece.capsule_radii_m[size_t(j)];
+        double bj = capsule_triangle_lower(axis[j], axis[j + 1], r, a, b, c);
+        const double h0 = glm::dot(n, axis[j] - a), h1 = glm::dot(n, axis[j + 1] - a);
+        if (h0 * h1 > 0.0) bj = std::max(bj, std::min(std::abs(h0), std::abs(h1)) - r);
+        if (bj < bound) {
+            bound = bj;
+            nearest = j;
+        }
+    }
+    return bound;
+}
+
+// Whether a triangle of a rigid object is within `reach` of piece k (which has capsules), and
+// bounds [lo, hi] on their distance: the capsules' bound first, then GJK from the nearest
+// capsule's axis to within `tol`; where rounding stalls GJK short of a verdict, the exact
+// distance. With `capsules_only`, the capsules' word.
+struct NearVerdict {
+    bool keep = false;
+    double lo = 0.0;
+    double hi = 1e300;
+    Vec3 direction{0.0};
+};
+
+NearVerdict judge_near(const Model& model, size_t k, const ConvexView& view, const Vec3* axis, const ModelObject& obj,
+                       uint32_t tri, double reach, double tol, bool capsules_only, double cutoff = 0.0,
+                       const Vec3* start = nullptr) {
+    const ToolPiece& piece = model.tool.pieces[k];
+    const auto& t = obj.mesh.triangles[tri];
+    const Vec3 &a = obj.mesh.vertices[t[0]], &b = obj.mesh.vertices[t[1]], &c = obj.mesh.vertices[t[2]];
+    int nearest = 0;
+    const double bound = piece_capsule_bound(piece, axis, a, b, c, obj.topology.triangle_normals[tri], nearest);
+    if (bound > reach) return NearVerdict{false, bound, 1e300};
+    if (capsules_only) return NearVerdict{true, bound, 1e300};
+    // GJK starts along the line from the triangle to the nearest capsule's axis.
+    const Vec3 centre = (a + b + c) / 3.0, d = axis[nearest + 1] - axis[nearest];
+    const double dd = glm::dot(d, d);
+    const double s = dd > 0.0 ? std::clamp(glm::dot(centre - axis[nearest], d) / dd, 0.0, 1.0) : 0.0;
+    const Vec3 hint = start && glm::dot(*start, *start) > 0.0 ? *start : axis[nearest] + s * d - centre;
+    DistanceBounds g = convex_triangle_distance(view, a, b, c, std::max(reach, cutoff), tol, 64, &hint);
+    if (g.lower <= reach && g.upper - g.lower > tol) {
+        g.lower = g.upper = distance_convex_triangle_by_faces(view, piece_triangles(model.tool, k),
+                                                              int(piece.triangle_count), a, b, c);
+    }
+    return NearVerdict{g.lower <= reach, std::max(bound, g.lower), g.upper, g.direction};
+}
+
+// How much further than the tick's reach a piece's superset reaches: the tool can move that far
+// before the superset is gathered again.
+double superset_margin(double reach) { return std::max(2e-4, 3.0 * reach); }
+
+// Gathers piece k's superset at pose `at` (the capsules `axis` placed there): every triangle of
+// the rigid objects the capsules' bound puts within reach + tol + the margin, each with the
+// bounds the old superset had for it where they still hold, else the capsules' bound. False (and
+// no superset) when they do not fit.
+bool gather_superset(const Model& model, size_t k, const Pose& at, const Vec3* axis, double reach, double tol,
+                     NearCache& c) {
+    PieceNearCache& pc = c.piece[k];
+    const ToolPiece& piece = model.tool.pieces[k];
+    int kept = 0;
+    if (pc.valid) {
+        for (int i = 0; i < pc.count; ++i) {
+            double m;
+            if (pc.entries[i].hi < 1e300 && near_cache_motion(c, pc.entries[i].stamp, k, m))
+                c.previous[kept++] = pc.entries[i];
+        }
+    }
+    near_cache_index_previous(c, kept);
+    pc.valid = false;
+    pc.count = 0;
+    const double radius = reach + tol + superset_margin(reach);
+    bool overflow = false;
+    for (size_t o = 0; o < model.objects.size() && !overflow; ++o) {
+        const ModelObject& obj = model.objects[o];
+        if (obj.compliant) continue;
+        const uint16_t ok = static_cast<uint16_t>(o);
+        obj.bvh.query_capsule_chain(axis, piece.capsule_radii_m.data(), piece.capsule_count, radius, [&](uint32_t tri) {
+            const auto& t = obj.mesh.triangles[tri];
+            int nearest = 0;
+            const double bound = piece_capsule_bound(piece, axis, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
+                                                     obj.mesh.vertices[t[2]], obj.topology.triangle_normals[tri], nearest);
+            if (bound > radius) return true;
+            if (pc.count >= kNearCacheEntries) {
+                overflow = true;
+                return false;
+            }
+            NearCacheEntry e;
+            e.tri = tri;
+            e.object = ok;
+            e.stamp = c.stamp;
+            e.lo = bound;
+            if (const NearCacheEntry* p = near_cache_find_previous(c, ok, tri)) e = *p;
+            pc.entries[pc.count++] = e;
+            return true;
+        });
+    }
+    if (overflow) return false;
+    pc.valid = true;
+    pc.pose = at;
+    pc.radius_m = radius;
+    return true;
+}
+
 // detect: the triangles each piece of the tool can reach within the box [lower, upper] of the
 // step's coordinates, each with a lower bound on its distance from the piece (for the guard).
 // Against a rigid object a long piece (a probe's tip or shank) is bounded by its capsules: the BVH
 // is walked along the chain of capsules, and a triangle is kept only when its distance bound to
 // some capsule, and then its distance to the piece itself (GJK), are within how far that piece
 // can move -- so a tilted probe does not collect the whole surface inside its box, nor the
-// triangles its capsules' roundness comes near, and nothing it could touch is left out. A
-// compliant object (which the tool enters) gives the triangles whose boxes meet the piece's box
-// inflated by the tool's reach `reach_all`: gather_atoms looks among them for the face that holds
-// a tool vertex inside it. A compact piece takes the triangles in its box inflated by its reach.
-// With `any_only`, stops at the first triangle the capsules' bound keeps. Needs the tool's planes and capsules at the
-// same pose (set_tool_planes). False on overflow.
-bool gather_near(const Model& model, const Vec3* tool_world, const double lower[6], const double upper[6],
-                 double reach_all, Workspace& w, bool any_only = false) {
+// triangles its capsules' roundness comes near, and nothing it could touch is left out. With the
+// near cache (RendererSettings::near_cache) the walk is over the piece's superset instead, and
+// only triangles whose verdict the motion since their last measurement leaves open are measured;
+// either way an object's triangles come in the order of their indices. A compliant object (which
+// the tool enters) gives the triangles whose boxes meet the piece's box inflated by the tool's
+// reach `reach_all`: gather_atoms looks among them for the face that holds a tool vertex inside
+// it. A compact piece takes the triangles in its box inflated by its reach. With `any_only`, stops
+// at the first triangle the capsules' bound keeps. Needs the tool's vertices, planes and capsules
+// placed at pose `at` (set_tool_planes). False on overflow.
+bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, const double lower[6],
+                 const double upper[6], double reach_all, Workspace& w, bool any_only = false) {
     w.near_count = 0;
     bool overflow = false;
     auto push = [&](const NearTri& nt) {
@@ -270,6 +389,11 @@ bool gather_near(const Model& model, const Vec3* tool_world, const double lower[
         w.near[w.near_count++] = nt;
         return !any_only;
     };
+    // To a tenth of the constraint tolerance: enough for the guard's bound.
+    const double tol = 0.1 * model.settings.constraint_tol_m;
+    NearCache& cache = w.cache;
+    const bool use_cache = !any_only && model.settings.near_cache;
+    if (use_cache) near_cache_begin(cache, model, at);
     for (size_t k = 0; k < model.tool.pieces.size(); ++k) {
         const ToolPiece& piece = model.tool.pieces[k];
         const uint8_t pk = static_cast<uint8_t>(k);
@@ -278,6 +402,14 @@ bool gather_near(const Model& model, const Vec3* tool_world, const double lower[
         const Vec3* axis = w.capsule + k * (kToolCapsules + 1);
         Aabb box;
         for (uint32_t v = piece.vertex_begin; v < piece.vertex_begin + piece.vertex_count; ++v) box.grow(tool_world[v]);
+        const ConvexView view = tool_view(model, k, tool_world, w);
+        PieceNearCache* pc = nullptr;
+        if (use_cache && piece.capsule_count > 0) {
+            pc = &cache.piece[k];
+            if (!pc->valid || reach + tol + motion_bound(cache, k, pc->pose, at) >= pc->radius_m)
+                if (!gather_superset(model, k, at, axis, reach, tol, cache)) pc = nullptr;
+        }
+        int cursor = 0;  // pc's entries are grouped by object, in object order
         for (size_t o = 0; o < model.objects.size(); ++o) {
             const ModelObject& obj = model.objects[o];
             const uint16_t ok = static_cast<uint16_t>(o);
@@ -300,46 +432,50 @@ bool gather_near(const Model& model, const Vec3* tool_world, const double lower[
                 if (any_only && w.near_count > 0) return true;
                 continue;
             }
-            // Along the piece's capsules; a triangle within reach of their bound is kept only when
-            // GJK finds it within reach of the piece itself. Its distance there is the start
-            // separation the guard needs.
-            const ConvexView view = tool_view(model, k, tool_world, w);
-            obj.bvh.query_capsule_chain(axis, piece.capsule_radii_m.data(), piece.capsule_count, reach, [&](uint32_t tri) {
-                const auto& t = obj.mesh.triangles[tri];
-                const Vec3 &a = obj.mesh.vertices[t[0]], &b = obj.mesh.vertices[t[1]], &c = obj.mesh.vertices[t[2]];
-                double bound = 1e300;
-                int nearest = 0;
-                const Vec3& n = obj.topology.triangle_normals[tri];
-                for (int j = 0; j < piece.capsule_count; ++j) {
-                    const double r = piece.capsule_radii_m[size_t(j)];
-                    double bj = capsule_triangle_lower(axis[j], axis[j + 1], r, a, b, c);
-                    // An axis wholly on one side of the triangle's plane is at least its nearer
-                    // end's height from the triangle.
-                    const double h0 = glm::dot(n, axis[j] - a), h1 = glm::dot(n, axis[j + 1] - a);
-                    if (h0 * h1 > 0.0) bj = std::max(bj, std::min(std::abs(h0), std::abs(h1)) - r);
-                    if (bj < bound) {
-                        bound = bj;
-                        nearest = j;
-                    }
-                }
-                if (bound > reach) return true;
-                // Whether anything may be in reach: the capsules' word is enough.
-                if (any_only) return push(NearTri{ok, tri, pk, bound});
-                // GJK starts along the line from the triangle to the nearest capsule's axis.
-                const Vec3 centre = (a + b + c) / 3.0, d = axis[nearest + 1] - axis[nearest];
-                const double dd = glm::dot(d, d);
-                const double s = dd > 0.0 ? std::clamp(glm::dot(centre - axis[nearest], d) / dd, 0.0, 1.0) : 0.0;
-                const Vec3 hint = axis[nearest] + s * d - centre;
-                // To a tenth of the constraint tolerance: enough for the guard's bound.
-                const DistanceBounds g =
-                    convex_triangle_distance(view, a, b, c, reach, 0.1 * model.settings.constraint_tol_m, 64, &hint);
-                if (g.lower > reach) return true;
-                NearTri nt{ok, tri, pk, std::max(bound, g.lower)};
-                if (g.lower > 0.0) nt.separation_m = g.lower;
+            const int run = w.near_count;
+            auto keep = [&](uint32_t tri, double lo, const Vec3& direction) {
+                NearTri nt{ok, tri, pk, lo};
+                // The distance where they are apart is the start separation the guard needs.
+                if (lo > 0.0) nt.separation_m = lo;
+                nt.direction = direction;
                 return push(nt);
-            });
+            };
+            if (pc) {
+                for (; cursor < pc->count && pc->entries[cursor].object == ok && !overflow; ++cursor) {
+                    NearCacheEntry& e = pc->entries[cursor];
+                    double m;
+                    if (near_cache_motion(cache, e.stamp, k, m)) {
+                        if (e.lo - m > reach + tol) continue;  // GJK could not keep it
+                        if (e.hi + m <= reach) {               // nor drop it
+                            // A bound this old is too loose for the guard: it measures the
+                            // separation itself where it needs it.
+                            NearTri nt{ok, e.tri, pk, e.lo - m};
+                            nt.direction = e.direction;
+                            if (!push(nt)) break;
+                            continue;
+                        }
+                    }
+                    const NearVerdict v =
+                        judge_near(model, k, view, axis, obj, e.tri, reach, tol, false, 2.0 * reach, &e.direction);
+                    e.lo = v.lo;
+                    e.hi = v.hi;
+                    if (glm::dot(v.direction, v.direction) > 0.0) e.direction = v.direction;
+                    e.stamp = cache.stamp;
+                    if (v.keep) keep(e.tri, v.lo, e.direction);
+                }
+            } else {
+                // Along the piece's capsules; a triangle within reach of their bound is kept only
+                // when GJK finds it within reach of the piece itself.
+                obj.bvh.query_capsule_chain(axis, piece.capsule_radii_m.data(), piece.capsule_count, reach,
+                                            [&](uint32_t tri) {
+                                                const NearVerdict v =
+                                                    judge_near(model, k, view, axis, obj, tri, reach, tol, any_only);
+                                                return v.keep ? keep(tri, v.lo, v.direction) : true;
+                                            });
+            }
             if (overflow) return false;
             if (any_only && w.near_count > 0) return true;
+            std::sort(w.near + run, w.near + w.near_count, [](const NearTri& x, const NearTri& y) { return x.tri < y.tri; });
         }
     }
     return true;
@@ -1143,7 +1279,8 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             // GJK's distance when they are apart (a bound as good as the separation, cheaper);
             // the separating-axis overlap when they touch.
             const ConvexView view = tool_view(model, nt.piece, w.tool_world, w);
-            const double apart = convex_triangle_distance(view, t0, t1, t2, moved_by).lower;
+            const Vec3* hint = glm::dot(nt.direction, nt.direction) > 0.0 ? &nt.direction : nullptr;
+            const double apart = convex_triangle_distance(view, t0, t1, t2, moved_by, 1e-13, 64, hint).lower;
             nt.separation_m = apart > 0.0 ? apart : separate_convex_triangle(view, t0, t1, t2).separation;
         }
         place_tool_vertices(model.tool, nx.q, nx.p, w.tool_moved);
@@ -1160,7 +1297,11 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             const auto& t = obj.mesh.triangles[w.near[i].tri];
             const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
             // Apart (GJK finds a gap along some direction): nothing to measure.
-            if (convex_triangle_distance(moved, t0, t1, t2, std::numeric_limits<double>::min()).lower > 0.0) continue;
+            const Vec3& dir = w.near[i].direction;
+            if (convex_triangle_distance(moved, t0, t1, t2, std::numeric_limits<double>::min(), 1e-13, 64,
+                                         glm::dot(dir, dir) > 0.0 ? &dir : nullptr)
+                    .lower > 0.0)
+                continue;
             const SatResult sat = separate_convex_triangle(moved, t0, t1, t2);
             const double give = triangle_zone_depth(model, w.slacks, w.near[i]);
             if (sat.separation < -(S.constraint_tol_m + give)) {
@@ -1445,6 +1586,11 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     // Unit to rounding is kept as given, so that free motion reproduces the input bit for bit.
     if (std::abs(qn - 1.0) > 1e-12) haptic.orientation = haptic_in.orientation / qn;
     if (!state.initialized) state = make_state(haptic);
+    // What the cache knows holds for this session at this tick only.
+    NearCache& cache = w.cache;
+    if (cache.session != state.session || cache.ticks != state.ticks || !same_pose(cache.graphic, state.graphic) ||
+        !same_pose(cache.last_haptic, state.last_haptic))
+        near_cache_reset(cache);
     // ---- detect ----
     const size_t nv = model.tool.mesh.vertices.size();
     if (nv > static_cast<size_t>(kMaxToolVertices) || model.tool.face_normals.size() > static_cast<size_t>(kMaxToolFaces) ||
@@ -1523,7 +1669,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                 reach = box_reach(S, model.tool.radius_m, straight_lo, straight_hi);
                 // In contact at the last tick, the tool moves freely only when nothing at all is
                 // in reach of the path: the first triangle found settles it.
-                if (!gather_near(model, w.tool_world, straight_lo, straight_hi, reach, w, state.active_count > 0)) {
+                if (!gather_near(model, base, w.tool_world, straight_lo, straight_hi, reach, w, state.active_count > 0)) {
                     scale *= 0.5;
                     stage_detect += micros(t0, Clock::now());
                     continue;
@@ -1541,7 +1687,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             }
             // In contact: what the force-continuity box can reach.
             reach = box_reach(S, model.tool.radius_m, rate_lower, rate_upper);
-            if (!gather_near(model, w.tool_world, rate_lower, rate_upper, reach, w)) {
+            if (!gather_near(model, base, w.tool_world, rate_lower, rate_upper, reach, w)) {
                 scale *= 0.5;
                 stage_detect += micros(t0, Clock::now());
                 continue;
@@ -1577,7 +1723,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             if (solved && !cc.real && !cc.virtual_only && !at_target) {
                 res.stats.released = true;
                 reach = box_reach(S, model.tool.radius_m, lower, upper);
-                if (!gather_near(model, w.tool_world, lower, upper, reach, w)) {
+                if (!gather_near(model, base, w.tool_world, lower, upper, reach, w)) {
                     solved = false;
                     scale *= 0.5;
                     continue;
@@ -1669,6 +1815,11 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     // A held tick keeps the last pose, and with it how deep it is in a compliant zone.
     if (solved) state.soft_depth_m = res.contacts > 0 ? res.stats.soft_depth_m : 0.0;
     state.sliding = res.contacts > 0 && sliding;
+    ++state.ticks;
+    cache.session = state.session;
+    cache.ticks = state.ticks;
+    cache.graphic = state.graphic;
+    cache.last_haptic = state.last_haptic;
     res.graphic = graphic;
 
     // ---- force ---- eq. 4

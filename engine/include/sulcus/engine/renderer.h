@@ -58,6 +58,10 @@ struct RendererSettings {
     double tie_tol_m = 1e-6;
     // Distance under which the tool and an object count as touching (for contact statistics).
     double contact_distance_m = 1e-6;
+    // Keep what detect measured about the triangles around each tool piece from tick to tick and
+    // measure again only those whose verdict the tool's motion since could have changed. Changes
+    // the step's cost, not its results (off: every tick measures from scratch).
+    bool near_cache = true;
     qp::Settings qp;
 };
 
@@ -162,6 +166,9 @@ struct Model {
     // What the scene uses; the step computes nothing for what it does not.
     bool any_compliant = false;
     bool any_friction = false;
+    // Distinct for every model built (copies share it): what the step's per-thread caches are
+    // kept for.
+    uint64_t serial = 0;
 };
 
 struct ModelBuild {
@@ -284,6 +291,11 @@ struct State {
     Pose last_haptic;
     double soft_depth_m = 0.0;  // deepest compliant zone at the last tick's solution
     bool sliding = false;       // friction: the tool slid (kinetic) at the last tick
+    // Which session this is (distinct per make_state) and how many ticks it has stepped: the step
+    // carries what it learnt from tick to tick (RendererSettings::near_cache) only along one
+    // session's own ticks, so a session stepped again from its start repeats itself exactly.
+    uint64_t session = 0;
+    uint64_t ticks = 0;
 };
 
 // Starts a state with the graphic tool at `pose` (which must not penetrate).

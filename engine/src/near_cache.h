@@ -1,0 +1,165 @@
+// The step's coherent near-set cache: what detect learnt about each triangle around a tool piece
+// at earlier ticks, so that a tick only measures the triangles whose verdict its motion since then
+// could have changed.
+//
+// For each piece with bounding capsules, the cache holds a superset: every triangle of the rigid
+// objects within `radius_m` of the piece at the pose it was gathered at. A triangle outside it is
+// at least radius_m - (how far the piece has moved since) from the piece, so while that stays above
+// the tick's reach the superset holds everything in reach. Each entry keeps bounds [lo, hi] on
+// its triangle's distance from the piece at a recent pose (one of kNearCacheSlots kept by stamp);
+// no point of the piece moves further than its motion bound since, so at the current pose the
+// distance lies in [lo - motion, hi + motion]. Where that interval settles the triangle's
+// verdict, no test is run; elsewhere the triangle is measured as without the cache.
+//
+// The cache belongs to the thread's step workspace and is keyed by the model's serial; it
+// changes how much the step measures, never what it keeps.
+#pragma once
+
+#include "sulcus/engine/renderer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+namespace sulcus {
+
+inline constexpr int kNearCacheSlots = 64;       // recent tool poses entries may refer to
+inline constexpr int kNearCacheEntries = 4096;   // superset triangles per piece at most
+inline constexpr int kNearCacheHash = 8192;      // carry-over table (a power of two, >= 2 entries)
+
+struct NearCacheEntry {
+    uint32_t tri = 0;
+    uint16_t object = 0;
+    uint64_t stamp = 0;  // the pose the bounds hold at
+    double lo = 0.0;     // bounds on the triangle's distance from the piece there (m)
+    double hi = 1e300;
+    Vec3 direction{0.0};  // GJK's last direction there (world; zero if none): the next search's start
+};
+
+struct PieceNearCache {
+    bool valid = false;
+    Pose pose;              // where the superset was gathered
+    double radius_m = 0.0;  // every triangle within this of the piece there is in it
+    int count = 0;          // entries, grouped by object in object order
+    NearCacheEntry entries[kNearCacheEntries];
+};
+
+struct NearCache {
+    uint64_t model_serial = 0;
+    // The session tick the cache was left at (State::session, State::ticks and its poses then):
+    // any other state starts it afresh.
+    uint64_t session = 0;
+    uint64_t ticks = 0;
+    Pose graphic, last_haptic;
+    uint64_t stamp = 0;  // the current pose's stamp (0 before the first)
+    Pose ring[kNearCacheSlots];
+    uint64_t ring_stamp[kNearCacheSlots] = {};
+    // Each piece's centre (tool frame) and the largest distance of its vertices from it (m).
+    Vec3 centre[kMaxToolPieces];
+    double spread_m[kMaxToolPieces] = {};
+    // Per slot and piece, how far no point of the piece moved from the slot's pose to the
+    // current one (m), worked out once per current pose.
+    double motion_m[kNearCacheSlots][kMaxToolPieces] = {};
+    uint64_t motion_for[kNearCacheSlots][kMaxToolPieces] = {};
+    PieceNearCache piece[kMaxToolPieces];
+    NearCacheEntry previous[kNearCacheEntries];  // a superset being replaced
+    int32_t table[kNearCacheHash];               // (object, triangle) -> index in `previous`
+};
+
+// The rotation angle (rad) between two orientations.
+inline double turn_between(const Quat& a, const Quat& b) {
+    const Quat d = a * glm::conjugate(b);
+    const double s = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    return 2.0 * std::atan2(s, std::abs(d.w));
+}
+
+// How far no point of piece k moves between poses `from` and `to`: its centre's displacement plus
+// the turn times its spread, with room for the rounding of placing the tool at either.
+inline double motion_bound(const NearCache& c, size_t k, const Pose& from, const Pose& to) {
+    const Vec3 a = from.position + from.orientation * c.centre[k], b = to.position + to.orientation * c.centre[k];
+    return glm::length(b - a) + turn_between(to.orientation, from.orientation) * c.spread_m[k] + 1e-12 +
+           1e-13 * (glm::length(b) + c.spread_m[k]);
+}
+
+inline bool same_pose(const Pose& a, const Pose& b) {
+    return a.position == b.position && a.orientation == b.orientation;
+}
+
+// Forgets every superset and every entry's pose.
+inline void near_cache_reset(NearCache& c) {
+    for (PieceNearCache& p : c.piece) p.valid = false;
+    c.stamp += kNearCacheSlots;
+}
+
+// Makes `pose` the current one (a new stamp unless it is the last one); forgets everything
+// when the model is not the one the cache was filled for.
+inline void near_cache_begin(NearCache& c, const Model& model, const Pose& pose) {
+    if (c.model_serial != model.serial) {
+        c.model_serial = model.serial;
+        near_cache_reset(c);
+        const ModelTool& tool = model.tool;
+        for (size_t k = 0; k < tool.pieces.size() && k < size_t(kMaxToolPieces); ++k) {
+            const ToolPiece& piece = tool.pieces[k];
+            Aabb box;
+            for (uint32_t v = piece.vertex_begin; v < piece.vertex_begin + piece.vertex_count; ++v)
+                box.grow(tool.mesh.vertices[v]);
+            c.centre[k] = box.center();
+            double spread = 0.0;
+            for (uint32_t v = piece.vertex_begin; v < piece.vertex_begin + piece.vertex_count; ++v)
+                spread = std::max(spread, glm::length(tool.mesh.vertices[v] - c.centre[k]));
+            c.spread_m[k] = spread;
+        }
+    }
+    const int last = int(c.stamp % kNearCacheSlots);
+    if (c.stamp > 0 && c.ring_stamp[last] == c.stamp && c.ring[last].position == pose.position &&
+        c.ring[last].orientation == pose.orientation)
+        return;
+    ++c.stamp;
+    const int slot = int(c.stamp % kNearCacheSlots);
+    c.ring[slot] = pose;
+    c.ring_stamp[slot] = c.stamp;
+}
+
+// How far no point of piece k moved from the pose of `stamp` to the current one; false when that
+// pose is no longer kept.
+inline bool near_cache_motion(NearCache& c, uint64_t stamp, size_t k, double& motion) {
+    if (stamp == 0 || stamp > c.stamp || c.stamp - stamp >= uint64_t(kNearCacheSlots)) return false;
+    const int slot = int(stamp % kNearCacheSlots);
+    if (c.ring_stamp[slot] != stamp) return false;
+    if (c.motion_for[slot][k] != c.stamp) {
+        c.motion_m[slot][k] = motion_bound(c, k, c.ring[slot], c.ring[c.stamp % kNearCacheSlots]);
+        c.motion_for[slot][k] = c.stamp;
+    }
+    motion = c.motion_m[slot][k];
+    return true;
+}
+
+inline uint32_t near_cache_hash(uint16_t object, uint32_t tri) {
+    uint64_t k = (uint64_t(object) << 32) | tri;
+    k *= 0x9E3779B97F4A7C15ull;
+    return uint32_t(k >> 40) & (kNearCacheHash - 1);
+}
+
+// Files `previous[0, count)` in the table.
+inline void near_cache_index_previous(NearCache& c, int count) {
+    std::memset(c.table, 0xff, sizeof(c.table));
+    for (int i = 0; i < count; ++i) {
+        uint32_t h = near_cache_hash(c.previous[i].object, c.previous[i].tri);
+        while (c.table[h] >= 0) h = (h + 1) & (kNearCacheHash - 1);
+        c.table[h] = i;
+    }
+}
+
+// The entry of `previous` for (object, tri), or null.
+inline const NearCacheEntry* near_cache_find_previous(const NearCache& c, uint16_t object, uint32_t tri) {
+    uint32_t h = near_cache_hash(object, tri);
+    while (c.table[h] >= 0) {
+        const NearCacheEntry& e = c.previous[c.table[h]];
+        if (e.tri == tri && e.object == object) return &e;
+        h = (h + 1) & (kNearCacheHash - 1);
+    }
+    return nullptr;
+}
+
+}  // namespace sulcus
