@@ -1353,13 +1353,22 @@ Vec3 contact_point(const Model& model, const Atom& a, const ToolPoseAt& t) {
 
 // solve + select: every candidate set within the box; the feasible one of least energy wins
 // (ties keep the lower index, for determinism). Leaves the winner's atoms in w.best.
+//
+// A candidate swaps one atom of the default set for an alternative. Where the default set was
+// solved by one QP, exactly, with that atom holding nothing (not active, or active with no
+// multiplier), the QP without the atom has the same solution, and adding the alternative cannot
+// lower its energy: the candidate cannot win, and is not solved.
 bool solve_candidates(const Model& model, const Pose& base, const Mat3& frame, const double target[6],
                       const double target_local[6], const double lower[6], const double upper[6], double reach,
                       const State& state, Workspace& w, StepStats& stats, double x_out[6]) {
     const int candidates = std::min(1 + w.alt_count, std::max(1, model.settings.max_candidates));
     double best_energy = 1e300;
     bool found = false;
+    // Whether each atom of the default set holds at its solution (when that solution qualifies).
+    bool plain_default = false;
+    bool holds[qp::kMaxRows] = {};
     for (int c = 0; c < candidates; ++c) {
+        if (c > 0 && plain_default && !holds[w.alts[c - 1].replace]) continue;
         w.cand_count = w.atom_count;
         std::copy(w.atoms, w.atoms + w.atom_count, w.cand);
         if (c > 0) w.cand[w.alts[c - 1].replace] = w.alts[c - 1].atom;
@@ -1367,6 +1376,16 @@ bool solve_candidates(const Model& model, const Pose& base, const Mat3& frame, c
             solve_candidate(model, base, frame, target, target_local, lower, upper, reach, state.active,
                             state.active_count, w, stats);
         ++stats.candidates;
+        if (c == 0 && cr.ok && cr.relinearizations == 1 && w.cand_count == w.atom_count &&
+            w.atom_count <= qp::kMaxRows) {
+            // One QP over the default atoms in their order (no separating planes added, no rows
+            // reordered): its rows are the atoms.
+            plain_default = true;
+            for (int k = 0; k < w.solution.active_count; ++k) {
+                const int row = w.solution.active[k];
+                if (row >= 0 && row < w.atom_count && w.solution.multipliers[k] > 0.0) holds[row] = true;
+            }
+        }
         if (cr.ok && cr.energy < best_energy) {
             best_energy = cr.energy;
             found = true;
