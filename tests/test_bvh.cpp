@@ -186,6 +186,51 @@ TEST(Bvh, CapsuleChainsVisitEveryTriangleWithinReachOnce) {
     EXPECT_GT(skipped, 10000);  // it does pass over what is out of reach
 }
 
+TEST(Bvh, CapsuleChainWalkInSlicesVisitsWhatTheWholeQueryVisits) {
+    // The same triangles in the same order, whatever the budget per slice; each slice stops
+    // within its budget (and a triangle's visit past it).
+    std::mt19937_64 rng(4242);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const TriMesh m = random_soup(3000, rng);
+    const Bvh bvh(m, 4);
+    int slices_total = 0;
+    for (int q = 0; q < 40; ++q) {
+        const int count = 1 + int(rng() % 5);
+        std::vector<Vec3> points{Vec3(u(rng), u(rng), u(rng))};
+        std::vector<double> radii;
+        for (int k = 0; k < count; ++k) {
+            points.push_back(points.back() + 0.2 * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5));
+            radii.push_back(0.05 * u(rng));
+        }
+        const double extra = 0.03 * u(rng);
+        std::vector<uint32_t> whole, sliced;
+        bvh.query_capsule_chain(points.data(), radii.data(), count, extra, [&](uint32_t t) {
+            whole.push_back(t);
+            return true;
+        });
+        for (long slice : {1L, 7L, 100L}) {
+            sliced.clear();
+            CapsuleChainWalk walk;
+            walk.start(points.data(), radii.data(), count, extra);
+            bool done = false;
+            int slices = 0;
+            while (!done && slices < 1000000) {
+                long budget = slice;
+                done = bvh.walk_capsule_chain(walk, budget, [&](uint32_t t) {
+                    sliced.push_back(t);
+                    return true;
+                });
+                EXPECT_GE(budget, -long(4)) << "a slice ran past its budget by more than a leaf";
+                ++slices;
+            }
+            EXPECT_TRUE(done);
+            EXPECT_EQ(sliced, whole) << "slice " << slice;
+            slices_total += slices;
+        }
+    }
+    EXPECT_GT(slices_total, 40 * 3 * 2);  // the walks did stop and go on
+}
+
 TEST(Bvh, QueriesThatTouchOnlyAFaceOrCornerCount) {
     // Boxes that meet in a single plane or point overlap (closed boxes), as in Aabb::overlaps.
     TriMesh m;

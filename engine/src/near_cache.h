@@ -15,6 +15,7 @@
 // changes how much the step measures, never what it keeps.
 #pragma once
 
+#include "sulcus/engine/bvh.h"
 #include "sulcus/engine/renderer.h"
 
 #include <algorithm>
@@ -45,6 +46,23 @@ struct PieceNearCache {
     NearCacheEntry entries[kNearCacheEntries];
 };
 
+// A piece's next superset, gathered a slice per tick while the current one still holds, so that
+// no tick pays for a whole walk: at `pose` (stamp `stamp`), every triangle of the rigid objects
+// within radius_m of the piece's capsules, object by object.
+struct SupersetBuild {
+    bool active = false;
+    size_t piece = 0;
+    Pose pose;
+    uint64_t stamp = 0;
+    double radius_m = 0.0;
+    Vec3 axis[kToolCapsules + 1];  // the piece's capsule chain at `pose`
+    size_t object = 0;             // the object being walked
+    bool walking = false;          // its walk has started
+    CapsuleChainWalk walk;
+    int count = 0;
+    NearCacheEntry entries[kNearCacheEntries];
+};
+
 struct NearCache {
     uint64_t model_serial = 0;
     // The session tick the cache was left at (State::session, State::ticks and its poses then):
@@ -65,6 +83,7 @@ struct NearCache {
     PieceNearCache piece[kMaxToolPieces];
     NearCacheEntry previous[kNearCacheEntries];  // a superset being replaced
     int32_t table[kNearCacheHash];               // (object, triangle) -> index in `previous`
+    SupersetBuild build;                         // at most one in progress
 };
 
 // The rotation angle (rad) between two orientations.
@@ -89,6 +108,7 @@ inline bool same_pose(const Pose& a, const Pose& b) {
 // Forgets every superset and every entry's pose.
 inline void near_cache_reset(NearCache& c) {
     for (PieceNearCache& p : c.piece) p.valid = false;
+    c.build.active = false;
     c.stamp += kNearCacheSlots;
 }
 

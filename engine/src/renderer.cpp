@@ -310,56 +310,122 @@ NearVerdict judge_near(const Model& model, size_t k, const ConvexView& view, con
 // before the superset is gathered again.
 double superset_margin(double reach) { return std::max(2e-4, 3.0 * reach); }
 
-// Gathers piece k's superset at pose `at` (the capsules `axis` placed there): every triangle of
-// the rigid objects the capsules' bound puts within reach + tol + the margin, each with the
-// bounds the old superset had for it where they still hold, else the capsules' bound. False (and
-// no superset) when they do not fit.
-bool gather_superset(const Model& model, size_t k, const Pose& at, const Vec3* axis, double reach, double tol,
-                     NearCache& c) {
-    PieceNearCache& pc = c.piece[k];
-    const ToolPiece& piece = model.tool.pieces[k];
+// Starts gathering piece k's next superset at pose `at` (its capsules `axis` placed there):
+// every triangle of the rigid objects the capsules' bound puts within `radius`.
+void start_superset(NearCache& c, size_t k, const Pose& at, const Vec3* axis, double radius) {
+    SupersetBuild& b = c.build;
+    b.active = true;
+    b.piece = k;
+    b.pose = at;
+    b.stamp = c.stamp;
+    b.radius_m = radius;
+    for (int j = 0; j <= kToolCapsules; ++j) b.axis[j] = axis[j];
+    b.object = 0;
+    b.walking = false;
+    b.count = 0;
+}
+
+// Walks the superset in progress on for `budget` (boxes and triangles looked at); true when it
+// is complete. One that outgrows kNearCacheEntries is dropped.
+bool advance_superset(const Model& model, NearCache& c, long budget) {
+    SupersetBuild& b = c.build;
+    const ToolPiece& piece = model.tool.pieces[b.piece];
+    for (; b.object < model.objects.size(); ++b.object, b.walking = false) {
+        const ModelObject& obj = model.objects[b.object];
+        if (obj.compliant) continue;
+        if (!b.walking) {
+            b.walk.start(b.axis, piece.capsule_radii_m.data(), piece.capsule_count, b.radius_m);
+            b.walking = true;
+        }
+        const uint16_t ok = static_cast<uint16_t>(b.object);
+        bool overflow = false;
+        const bool done = obj.bvh.walk_capsule_chain(b.walk, budget, [&](uint32_t tri) {
+            const auto& t = obj.mesh.triangles[tri];
+            int nearest = 0;
+            const double bound = piece_capsule_bound(piece, b.axis, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
+                                                     obj.mesh.vertices[t[2]], obj.topology.triangle_normals[tri], nearest);
+            if (bound > b.radius_m) return true;
+            if (b.count >= kNearCacheEntries) {
+                overflow = true;
+                return false;
+            }
+            NearCacheEntry& e = b.entries[b.count++];
+            e = NearCacheEntry{};
+            e.tri = tri;
+            e.object = ok;
+            e.stamp = b.stamp;
+            e.lo = bound;
+            return true;
+        });
+        if (overflow) {
+            b.active = false;
+            return false;
+        }
+        if (!done) return false;
+    }
+    return true;
+}
+
+// Makes the completed superset its piece's, each entry with the bounds the old superset had for
+// its triangle where they still hold (else the capsules' bound where it was gathered).
+void install_superset(const Model& model, NearCache& c) {
+    SupersetBuild& b = c.build;
+    PieceNearCache& pc = c.piece[b.piece];
+    (void)model;
     int kept = 0;
     if (pc.valid) {
         for (int i = 0; i < pc.count; ++i) {
             double m;
-            if (pc.entries[i].hi < 1e300 && near_cache_motion(c, pc.entries[i].stamp, k, m))
+            if (pc.entries[i].hi < 1e300 && near_cache_motion(c, pc.entries[i].stamp, b.piece, m))
                 c.previous[kept++] = pc.entries[i];
         }
     }
     near_cache_index_previous(c, kept);
-    pc.valid = false;
-    pc.count = 0;
-    const double radius = reach + tol + superset_margin(reach);
-    bool overflow = false;
-    for (size_t o = 0; o < model.objects.size() && !overflow; ++o) {
-        const ModelObject& obj = model.objects[o];
-        if (obj.compliant) continue;
-        const uint16_t ok = static_cast<uint16_t>(o);
-        obj.bvh.query_capsule_chain(axis, piece.capsule_radii_m.data(), piece.capsule_count, radius, [&](uint32_t tri) {
-            const auto& t = obj.mesh.triangles[tri];
-            int nearest = 0;
-            const double bound = piece_capsule_bound(piece, axis, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
-                                                     obj.mesh.vertices[t[2]], obj.topology.triangle_normals[tri], nearest);
-            if (bound > radius) return true;
-            if (pc.count >= kNearCacheEntries) {
-                overflow = true;
-                return false;
-            }
-            NearCacheEntry e;
-            e.tri = tri;
-            e.object = ok;
-            e.stamp = c.stamp;
-            e.lo = bound;
-            if (const NearCacheEntry* p = near_cache_find_previous(c, ok, tri)) e = *p;
-            pc.entries[pc.count++] = e;
-            return true;
-        });
+    for (int i = 0; i < b.count; ++i) {
+        const NearCacheEntry* p = near_cache_find_previous(c, b.entries[i].object, b.entries[i].tri);
+        pc.entries[i] = p ? *p : b.entries[i];
     }
-    if (overflow) return false;
+    pc.count = b.count;
     pc.valid = true;
-    pc.pose = at;
-    pc.radius_m = radius;
-    return true;
+    pc.pose = b.pose;
+    pc.radius_m = b.radius_m;
+    b.active = false;
+}
+
+// Work per tick on a superset in progress (boxes and triangles looked at): about 15 us.
+constexpr long kSupersetSlice = 384;
+
+// Piece k's superset for a tick of reach `reach` at pose `at` (capsules `axis`): the current one
+// while it holds, the one in progress once complete, and a new one gathered at once when neither
+// holds. A new one is started in slices once the tool has used 40 % of the margin. Null when a
+// superset does not fit (the caller measures from scratch).
+PieceNearCache* piece_superset(const Model& model, NearCache& c, size_t k, const Pose& at, const Vec3* axis,
+                               double reach, double tol) {
+    PieceNearCache& pc = c.piece[k];
+    SupersetBuild& b = c.build;
+    const double need = reach + tol;
+    auto holds = [&](const Pose& from, double radius) { return need + motion_bound(c, k, from, at) < radius; };
+    const bool current = pc.valid && holds(pc.pose, pc.radius_m);
+    if (b.active && b.piece == k) {
+        if (!holds(b.pose, b.radius_m)) b.active = false;  // the tool went past it: dropped
+        else if (advance_superset(model, c, current ? kSupersetSlice : std::numeric_limits<long>::max()))
+            install_superset(model, c);
+    }
+    if (pc.valid && holds(pc.pose, pc.radius_m)) {
+        const double margin = superset_margin(reach);
+        if (!b.active && pc.radius_m - need - motion_bound(c, k, pc.pose, at) < 0.6 * margin) {
+            start_superset(c, k, at, axis, need + margin);
+            if (advance_superset(model, c, kSupersetSlice)) install_superset(model, c);
+        }
+        return &pc;
+    }
+    start_superset(c, k, at, axis, need + superset_margin(reach));
+    if (!advance_superset(model, c, std::numeric_limits<long>::max())) {
+        pc.valid = false;
+        return nullptr;
+    }
+    install_superset(model, c);
+    return &pc;
 }
 
 // detect: the triangles each piece of the tool can reach within the box [lower, upper] of the
@@ -403,12 +469,8 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
         Aabb box;
         for (uint32_t v = piece.vertex_begin; v < piece.vertex_begin + piece.vertex_count; ++v) box.grow(tool_world[v]);
         const ConvexView view = tool_view(model, k, tool_world, w);
-        PieceNearCache* pc = nullptr;
-        if (use_cache && piece.capsule_count > 0) {
-            pc = &cache.piece[k];
-            if (!pc->valid || reach + tol + motion_bound(cache, k, pc->pose, at) >= pc->radius_m)
-                if (!gather_superset(model, k, at, axis, reach, tol, cache)) pc = nullptr;
-        }
+        PieceNearCache* pc =
+            use_cache && piece.capsule_count > 0 ? piece_superset(model, cache, k, at, axis, reach, tol) : nullptr;
         int cursor = 0;  // pc's entries are grouped by object, in object order
         for (size_t o = 0; o < model.objects.size(); ++o) {
             const ModelObject& obj = model.objects[o];
@@ -445,13 +507,25 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                     NearCacheEntry& e = pc->entries[cursor];
                     double m;
                     if (near_cache_motion(cache, e.stamp, k, m)) {
-                        if (e.lo - m > reach + tol) continue;  // GJK could not keep it
-                        if (e.hi + m <= reach) {               // nor drop it
+                        // Before its pose leaves the ring, a settled entry's bounds move to the
+                        // current pose (widened by the motion since), rather than being measured
+                        // again once forgotten.
+                        const bool rebase = cache.stamp - e.stamp >= uint64_t(kNearCacheSlots / 2);
+                        const bool out = e.lo - m > reach + tol;  // GJK could not keep it
+                        const bool in = !out && e.hi + m <= reach;  // nor drop it
+                        if (in) {
                             // A bound this old is too loose for the guard: it measures the
                             // separation itself where it needs it.
                             NearTri nt{ok, e.tri, pk, e.lo - m};
                             nt.direction = e.direction;
                             if (!push(nt)) break;
+                        }
+                        if (out || in) {
+                            if (rebase) {
+                                e.lo -= m;
+                                if (e.hi < 1e300) e.hi += m;
+                                e.stamp = cache.stamp;
+                            }
                             continue;
                         }
                     }

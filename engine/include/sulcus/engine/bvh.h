@@ -7,9 +7,12 @@
 #include "sulcus/engine/types.h"
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace sulcus {
+
+struct CapsuleChainWalk;
 
 class Bvh {
 public:
@@ -34,6 +37,12 @@ public:
     // Allocation-free; stops early when visit returns false.
     template <class Visit>
     bool query_capsule_chain(const Vec3* points, const double* radii, int count, double extra, Visit&& visit) const;
+
+    // The same walk in pieces: goes on with `walk` (CapsuleChainWalk::start sets its chain)
+    // until `budget` (decreased by one per box and per triangle looked at) runs out, or to its
+    // end; true when the walk is over (every triangle visited, or visit returned false).
+    template <class Visit>
+    bool walk_capsule_chain(CapsuleChainWalk& walk, long& budget, Visit&& visit) const;
 
     const std::vector<Node>& nodes() const { return nodes_; }
     const std::vector<uint32_t>& order() const { return order_; }
@@ -82,45 +91,84 @@ bool Bvh::query(const Aabb& q, Visit&& visit) const {
     return true;
 }
 
-template <class Visit>
-bool Bvh::query_capsule_chain(const Vec3* points, const double* radii, int count, double extra, Visit&& visit) const {
-    if (nodes_.empty() || count <= 0) return true;
-    constexpr int kMaxChain = 16;
-    count = count < kMaxChain ? count : kMaxChain;
-    Aabb q;
+// A walk of the triangles near a chain of capsules (as query_capsule_chain) that can stop after
+// a budget of work and go on later: what a search spread over several servo ticks needs.
+struct CapsuleChainWalk {
+    static constexpr int kMaxChain = 16;
+    int count = 0;
+    Vec3 points[kMaxChain + 1];
     Vec3 d[kMaxChain];
-    double dd[kMaxChain], r[kMaxChain];
-    for (int k = 0; k < count; ++k) {
-        r[k] = radii[k] + extra;
-        Aabb c;
-        c.grow(points[k]);
-        c.grow(points[k + 1]);
-        c.inflate(r[k]);
-        q.grow(c.lo);
-        q.grow(c.hi);
-        d[k] = points[k + 1] - points[k];
-        dd[k] = glm::dot(d[k], d[k]);
+    double dd[kMaxChain] = {}, r[kMaxChain] = {};
+    Aabb q;
+    uint32_t stack[kBvhMaxDepth + 2] = {};
+    int top = 0;
+
+    void start(const Vec3* chain, const double* radii, int chain_count, double extra) {
+        count = chain_count < kMaxChain ? chain_count : kMaxChain;
+        q = Aabb{};
+        for (int k = 0; k <= count; ++k) points[k] = chain[k];
+        for (int k = 0; k < count; ++k) {
+            r[k] = radii[k] + extra;
+            Aabb c;
+            c.grow(points[k]);
+            c.grow(points[k + 1]);
+            c.inflate(r[k]);
+            q.grow(c.lo);
+            q.grow(c.hi);
+            d[k] = points[k + 1] - points[k];
+            dd[k] = glm::dot(d[k], d[k]);
+        }
+        top = 0;
+        stack[top++] = 0;
     }
-    auto near_any = [&](const Aabb& b) {
+    bool near_any(const Aabb& b) const {
         for (int k = 0; k < count; ++k)
             if (bvh_detail::box_near_segment(b, points[k], d[k], dd[k], r[k])) return true;
         return false;
-    };
-    uint32_t stack[kBvhMaxDepth + 2];
-    int top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-        const Node& n = nodes_[stack[--top]];
-        if (!n.box.overlaps(q) || !near_any(n.box)) continue;
+    }
+};
+
+template <class Visit>
+bool Bvh::walk_capsule_chain(CapsuleChainWalk& w, long& budget, Visit&& visit) const {
+    if (nodes_.empty() || w.count <= 0) {
+        w.top = 0;
+        return true;
+    }
+    while (w.top > 0) {
+        if (budget <= 0) return false;
+        --budget;
+        const Node& n = nodes_[w.stack[--w.top]];
+        if (!n.box.overlaps(w.q) || !w.near_any(n.box)) continue;
         if (n.count > 0) {
-            for (uint32_t i = n.first; i < n.first + n.count; ++i)
-                if (boxes_[i].overlaps(q) && near_any(boxes_[i]) && !visit(order_[i])) return false;
+            for (uint32_t i = n.first; i < n.first + n.count; ++i) {
+                if (!boxes_[i].overlaps(w.q) || !w.near_any(boxes_[i])) continue;
+                --budget;
+                if (!visit(order_[i])) {
+                    w.top = 0;
+                    return true;
+                }
+            }
         } else {
-            stack[top++] = n.first + 1;
-            stack[top++] = n.first;
+            w.stack[w.top++] = n.first + 1;
+            w.stack[w.top++] = n.first;
         }
     }
     return true;
+}
+
+template <class Visit>
+bool Bvh::query_capsule_chain(const Vec3* points, const double* radii, int count, double extra, Visit&& visit) const {
+    if (nodes_.empty() || count <= 0) return true;
+    CapsuleChainWalk w;
+    w.start(points, radii, count, extra);
+    bool stopped = false;
+    long budget = std::numeric_limits<long>::max();
+    walk_capsule_chain(w, budget, [&](uint32_t tri) {
+        if (visit(tri)) return true;
+        stopped = true;
+        return false;
+    });
+    return !stopped;
 }
 
 }  // namespace sulcus
