@@ -142,24 +142,42 @@ TEST(Bvh, RandomSoupsMatchBruteForce) {
     }
 }
 
+// A random chain of 1 to max_count capsules in the unit cube: links of up to `step` per axis,
+// radii up to 0.05, and an extra reach up to `extra_max`.
+struct CapsuleChain {
+    int count = 0;
+    std::vector<Vec3> points;
+    std::vector<double> radii;
+    double extra = 0.0;
+};
+
+CapsuleChain random_chain(std::mt19937_64& rng, int max_count, double step, double extra_max) {
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    CapsuleChain c;
+    c.count = 1 + int(rng() % unsigned(max_count));
+    c.points.push_back(Vec3(u(rng), u(rng), u(rng)));
+    for (int k = 0; k < c.count; ++k) {
+        c.points.push_back(c.points.back() + step * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5));
+        c.radii.push_back(0.05 * u(rng));
+    }
+    c.extra = extra_max * u(rng);
+    return c;
+}
+
 TEST(Bvh, CapsuleChainsVisitEveryTriangleWithinReachOnce) {
     // Every triangle within radius + extra of some capsule of the chain is visited, and none
     // twice, against the exact segment-triangle distance.
     std::mt19937_64 rng(777);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
     int near = 0, skipped = 0;
     for (size_t n : {1u, 50u, 3000u}) {
         const TriMesh m = random_soup(n, rng);
         const Bvh bvh(m, 4);
         for (int q = 0; q < 60; ++q) {
-            const int count = 1 + int(rng() % 6);
-            std::vector<Vec3> points{Vec3(u(rng), u(rng), u(rng))};
-            std::vector<double> radii;
-            for (int k = 0; k < count; ++k) {
-                points.push_back(points.back() + 0.15 * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5));
-                radii.push_back(0.05 * u(rng));
-            }
-            const double extra = 0.02 * u(rng);
+            const CapsuleChain chain = random_chain(rng, 6, 0.15, 0.02);
+            const int count = chain.count;
+            const std::vector<Vec3>& points = chain.points;
+            const std::vector<double>& radii = chain.radii;
+            const double extra = chain.extra;
             std::vector<int> seen(n, 0);
             EXPECT_TRUE(bvh.query_capsule_chain(points.data(), radii.data(), count, extra, [&](uint32_t t) {
                 ++seen[t];
@@ -190,19 +208,15 @@ TEST(Bvh, CapsuleChainWalkInSlicesVisitsWhatTheWholeQueryVisits) {
     // The same triangles in the same order, whatever the budget per slice; each slice stops
     // within its budget (and a triangle's visit past it).
     std::mt19937_64 rng(4242);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
     const TriMesh m = random_soup(3000, rng);
     const Bvh bvh(m, 4);
     int slices_total = 0;
     for (int q = 0; q < 40; ++q) {
-        const int count = 1 + int(rng() % 5);
-        std::vector<Vec3> points{Vec3(u(rng), u(rng), u(rng))};
-        std::vector<double> radii;
-        for (int k = 0; k < count; ++k) {
-            points.push_back(points.back() + 0.2 * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5));
-            radii.push_back(0.05 * u(rng));
-        }
-        const double extra = 0.03 * u(rng);
+        const CapsuleChain chain = random_chain(rng, 5, 0.2, 0.03);
+        const int count = chain.count;
+        const std::vector<Vec3>& points = chain.points;
+        const std::vector<double>& radii = chain.radii;
+        const double extra = chain.extra;
         std::vector<uint32_t> whole, sliced;
         bvh.query_capsule_chain(points.data(), radii.data(), count, extra, [&](uint32_t t) {
             whole.push_back(t);

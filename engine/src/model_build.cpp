@@ -143,12 +143,16 @@ std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
             segments.triangles.push_back({tool.piece_edges[e][0], tool.piece_edges[e][1], tool.piece_edges[e][1]});
         piece.edge_bvh = Bvh(segments, 2);
     }
+    Aabb box;
     for (const Vec3& v : mesh.vertices) {
         tool.mesh.vertices.push_back(v);
         tool.vertex_piece.push_back(uint8_t(index));
         tool.radius_m = std::max(tool.radius_m, glm::length(v));
         piece.radius_m = std::max(piece.radius_m, glm::length(v));
+        box.grow(v);
     }
+    piece.centre = box.center();
+    for (const Vec3& v : mesh.vertices) piece.spread_m = std::max(piece.spread_m, glm::length(v - piece.centre));
     for (const auto& t : mesh.triangles) {
         tool.piece_triangles.push_back(t);
         tool.mesh.triangles.push_back({t[0] + piece.vertex_begin, t[1] + piece.vertex_begin, t[2] + piece.vertex_begin});

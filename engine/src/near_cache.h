@@ -17,8 +17,8 @@
 
 #include "sulcus/engine/bvh.h"
 #include "sulcus/engine/renderer.h"
+#include "so3.h"
 
-#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -73,9 +73,6 @@ struct NearCache {
     uint64_t stamp = 0;  // the current pose's stamp (0 before the first)
     Pose ring[kNearCacheSlots];
     uint64_t ring_stamp[kNearCacheSlots] = {};
-    // Each piece's centre (tool frame) and the largest distance of its vertices from it (m).
-    Vec3 centre[kMaxToolPieces];
-    double spread_m[kMaxToolPieces] = {};
     // Per slot and piece, how far no point of the piece moved from the slot's pose to the
     // current one (m), worked out once per current pose.
     double motion_m[kNearCacheSlots][kMaxToolPieces] = {};
@@ -86,19 +83,12 @@ struct NearCache {
     SupersetBuild build;                         // at most one in progress
 };
 
-// The rotation angle (rad) between two orientations.
-inline double turn_between(const Quat& a, const Quat& b) {
-    const Quat d = a * glm::conjugate(b);
-    const double s = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-    return 2.0 * std::atan2(s, std::abs(d.w));
-}
-
-// How far no point of piece k moves between poses `from` and `to`: its centre's displacement plus
+// How far no point of `piece` moves between poses `from` and `to`: its centre's displacement plus
 // the turn times its spread, with room for the rounding of placing the tool at either.
-inline double motion_bound(const NearCache& c, size_t k, const Pose& from, const Pose& to) {
-    const Vec3 a = from.position + from.orientation * c.centre[k], b = to.position + to.orientation * c.centre[k];
-    return glm::length(b - a) + turn_between(to.orientation, from.orientation) * c.spread_m[k] + 1e-12 +
-           1e-13 * (glm::length(b) + c.spread_m[k]);
+inline double motion_bound(const ToolPiece& piece, const Pose& from, const Pose& to) {
+    const Vec3 a = from.position + from.orientation * piece.centre, b = to.position + to.orientation * piece.centre;
+    const double turn = glm::length(quat_log(to.orientation * glm::conjugate(from.orientation)));
+    return glm::length(b - a) + turn * piece.spread_m + 1e-12 + 1e-13 * (glm::length(b) + piece.spread_m);
 }
 
 inline bool same_pose(const Pose& a, const Pose& b) {
@@ -118,18 +108,6 @@ inline void near_cache_begin(NearCache& c, const Model& model, const Pose& pose)
     if (c.model_serial != model.serial) {
         c.model_serial = model.serial;
         near_cache_reset(c);
-        const ModelTool& tool = model.tool;
-        for (size_t k = 0; k < tool.pieces.size() && k < size_t(kMaxToolPieces); ++k) {
-            const ToolPiece& piece = tool.pieces[k];
-            Aabb box;
-            for (uint32_t v = piece.vertex_begin; v < piece.vertex_begin + piece.vertex_count; ++v)
-                box.grow(tool.mesh.vertices[v]);
-            c.centre[k] = box.center();
-            double spread = 0.0;
-            for (uint32_t v = piece.vertex_begin; v < piece.vertex_begin + piece.vertex_count; ++v)
-                spread = std::max(spread, glm::length(tool.mesh.vertices[v] - c.centre[k]));
-            c.spread_m[k] = spread;
-        }
     }
     const int last = int(c.stamp % kNearCacheSlots);
     if (c.stamp > 0 && c.ring_stamp[last] == c.stamp && c.ring[last].position == pose.position &&
@@ -141,14 +119,14 @@ inline void near_cache_begin(NearCache& c, const Model& model, const Pose& pose)
     c.ring_stamp[slot] = c.stamp;
 }
 
-// How far no point of piece k moved from the pose of `stamp` to the current one; false when that
-// pose is no longer kept.
-inline bool near_cache_motion(NearCache& c, uint64_t stamp, size_t k, double& motion) {
+// How far no point of piece k (of `model`) moved from the pose of `stamp` to the current one;
+// false when that pose is no longer kept.
+inline bool near_cache_motion(NearCache& c, const Model& model, uint64_t stamp, size_t k, double& motion) {
     if (stamp == 0 || stamp > c.stamp || c.stamp - stamp >= uint64_t(kNearCacheSlots)) return false;
     const int slot = int(stamp % kNearCacheSlots);
     if (c.ring_stamp[slot] != stamp) return false;
     if (c.motion_for[slot][k] != c.stamp) {
-        c.motion_m[slot][k] = motion_bound(c, k, c.ring[slot], c.ring[c.stamp % kNearCacheSlots]);
+        c.motion_m[slot][k] = motion_bound(model.tool.pieces[k], c.ring[slot], c.ring[c.stamp % kNearCacheSlots]);
         c.motion_for[slot][k] = c.stamp;
     }
     motion = c.motion_m[slot][k];

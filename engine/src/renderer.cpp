@@ -371,12 +371,11 @@ bool advance_superset(const Model& model, NearCache& c, long budget) {
 void install_superset(const Model& model, NearCache& c) {
     SupersetBuild& b = c.build;
     PieceNearCache& pc = c.piece[b.piece];
-    (void)model;
     int kept = 0;
     if (pc.valid) {
         for (int i = 0; i < pc.count; ++i) {
             double m;
-            if (pc.entries[i].hi < 1e300 && near_cache_motion(c, pc.entries[i].stamp, b.piece, m))
+            if (pc.entries[i].hi < 1e300 && near_cache_motion(c, model, pc.entries[i].stamp, b.piece, m))
                 c.previous[kept++] = pc.entries[i];
         }
     }
@@ -403,23 +402,27 @@ PieceNearCache* piece_superset(const Model& model, NearCache& c, size_t k, const
                                double reach, double tol) {
     PieceNearCache& pc = c.piece[k];
     SupersetBuild& b = c.build;
-    const double need = reach + tol;
-    auto holds = [&](const Pose& from, double radius) { return need + motion_bound(c, k, from, at) < radius; };
-    const bool current = pc.valid && holds(pc.pose, pc.radius_m);
+    const ToolPiece& piece = model.tool.pieces[k];
+    const double need = reach + tol, margin = superset_margin(reach);
+    // How much further than the need a superset gathered at `from` still reaches (< 0: it does not hold).
+    auto room = [&](const Pose& from, double radius) { return radius - need - motion_bound(piece, from, at); };
+    double current = pc.valid ? room(pc.pose, pc.radius_m) : -1.0;
     if (b.active && b.piece == k) {
-        if (!holds(b.pose, b.radius_m)) b.active = false;  // the tool went past it: dropped
-        else if (advance_superset(model, c, current ? kSupersetSlice : std::numeric_limits<long>::max()))
+        if (!(room(b.pose, b.radius_m) > 0.0)) {
+            b.active = false;  // the tool went past it: dropped
+        } else if (advance_superset(model, c, current > 0.0 ? kSupersetSlice : std::numeric_limits<long>::max())) {
             install_superset(model, c);
+            current = room(pc.pose, pc.radius_m);
+        }
     }
-    if (pc.valid && holds(pc.pose, pc.radius_m)) {
-        const double margin = superset_margin(reach);
-        if (!b.active && pc.radius_m - need - motion_bound(c, k, pc.pose, at) < 0.6 * margin) {
+    if (current > 0.0) {
+        if (!b.active && current < 0.6 * margin) {
             start_superset(c, k, at, axis, need + margin);
             if (advance_superset(model, c, kSupersetSlice)) install_superset(model, c);
         }
         return &pc;
     }
-    start_superset(c, k, at, axis, need + superset_margin(reach));
+    start_superset(c, k, at, axis, need + margin);
     if (!advance_superset(model, c, std::numeric_limits<long>::max())) {
         pc.valid = false;
         return nullptr;
@@ -506,7 +509,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                 for (; cursor < pc->count && pc->entries[cursor].object == ok && !overflow; ++cursor) {
                     NearCacheEntry& e = pc->entries[cursor];
                     double m;
-                    if (near_cache_motion(cache, e.stamp, k, m)) {
+                    if (near_cache_motion(cache, model, e.stamp, k, m)) {
                         // Before its pose leaves the ring, a settled entry's bounds move to the
                         // current pose (widened by the motion since), rather than being measured
                         // again once forgotten.

@@ -123,6 +123,11 @@ struct ToolPiece {
     // no point of the piece further than radius_m * theta (a probe's tip, near the origin, far
     // less than its handle).
     double radius_m = 0.0;
+    // The centre of the piece's box (tool frame) and the largest distance of its vertices from it:
+    // a motion moves no point of the piece further than the centre's displacement plus the turn
+    // times spread_m.
+    Vec3 centre{0.0};
+    double spread_m = 0.0;
     // The piece's edges (ModelTool::edges from edge_begin) in a hierarchy of boxes, tool frame:
     // finds the few tool edges near an object edge without looking at every one.
     Bvh edge_bvh;
