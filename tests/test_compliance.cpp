@@ -98,6 +98,48 @@ TEST(Compliance, EnteredByExactlyForceOverStiffness) {
 }
 
 // Along a stiffening curve the depth follows the curve at every force on the way in.
+// Two compliant slabs side by side: the state knows how deep the tool is in each object, so the
+// next tick looks behind the surface of the one it is in, and not behind the other's.
+TEST(Compliance, StateKnowsHowDeepEachObjectGivesWay) {
+    const std::vector<SceneObject> objects = {slab(0, Vec3(-6 * mm, -1 * mm, 0), 5 * mm),
+                                              slab(1, Vec3(6 * mm, -1 * mm, 0), 5 * mm)};
+    auto model = build(cube(), objects, {linear("gum", 1000.0), linear("firm", 4000.0)});
+    ASSERT_TRUE(model);
+    const double K = model->settings.haptic.stiffness_N_per_m;
+    State state = make_state(pose(Vec3(-6 * mm, 0.5 * mm, 0)));
+    auto press = [&](double x, int ticks) {
+        StepResult r;
+        for (int i = 0; i <= ticks; ++i) {
+            const double y = 0.5 * mm - 1.0 * mm * std::min(1.0, i / (0.5 * ticks));
+            r = step(*model, state, pose(Vec3(x, y, 0)));
+            EXPECT_NE(r.status, StepStatus::Held) << "tick " << i;
+        }
+        return r;
+    };
+    StepResult r = press(-6 * mm, 600);
+    ASSERT_EQ(r.status, StepStatus::Contact);
+    ASSERT_EQ(state.soft.count, 1);
+    EXPECT_EQ(state.soft.object[0], 0);
+    EXPECT_EQ(state.soft.depth_m[0], r.stats.soft_depth_m);
+    EXPECT_EQ(state.soft.of(1), 0.0);
+    const double force = glm::length(r.force_N);
+    EXPECT_NEAR(state.soft.of(0), force / 1000.0, 1e-6);
+    EXPECT_NEAR(force, K * (0.5 * mm - state.soft.of(0)), 1e-6 * K);  // the haptic tool 0.5 mm in
+
+    // Lifted clear: in nothing.
+    for (int i = 0; i < 400; ++i) r = step(*model, state, pose(Vec3(-6 * mm, 0.5 * mm * std::min(1.0, i / 200.0), 0)));
+    EXPECT_EQ(r.status, StepStatus::Free);
+    EXPECT_EQ(state.soft.count, 0);
+
+    // Over the other slab and into it: only that one, by its own stiffness.
+    for (int i = 0; i <= 400; ++i) r = step(*model, state, pose(Vec3(-6 * mm + 12 * mm * std::min(1.0, i / 300.0), 0.5 * mm, 0)));
+    r = press(6 * mm, 600);
+    ASSERT_EQ(r.status, StepStatus::Contact);
+    ASSERT_EQ(state.soft.count, 1);
+    EXPECT_EQ(state.soft.object[0], 1);
+    EXPECT_NEAR(state.soft.of(1), glm::length(r.force_N) / 4000.0, 1e-6);
+}
+
 TEST(Compliance, DepthFollowsTheYieldCurve) {
     const std::vector<SceneObject> objects = {slab(0)};
     auto model = build(cube(), objects, {stiffening()});

@@ -206,6 +206,9 @@ struct Workspace {
     int order_index[kMaxAtoms];
     Slacks slacks;
     int8_t best_slot[kMaxAtoms];
+    // How deep the tool is in each compliant object at the base of the pass: the state's at the
+    // first, the earlier pass's answer's after.
+    SoftDepths soft;
     Slacks best_slacks;
     FrictionContacts friction, best_friction;
     qp::Problem problem;
@@ -648,13 +651,16 @@ bool in_vertex_cone(const ModelObject& obj, uint32_t v, const Vec3& p) {
     return true;
 }
 
-// gather: the principal-contact atoms of every feature pair within `reach`. The tool may be up to
-// `soft` inside a compliant object: its features stay in play that far behind their surface.
-void gather_atoms(const Model& model, const Pose& base, double reach, double soft, const Vec3& push, Workspace& w) {
+// gather: the principal-contact atoms of every feature pair within `reach`. The tool may be inside
+// a compliant object by as deep as it is at the base (Workspace::soft) plus the reach: that
+// object's features stay in play that far behind their surface.
+void gather_atoms(const Model& model, const Pose& base, double reach, const Vec3& push, Workspace& w) {
     const ModelTool& tool = model.tool;
+    const SoftDepths& soft = w.soft;
     const Quat base_inv = glm::conjugate(base.orientation);
-    auto back_of = [&](const ModelObject& o) { return o.compliant ? kBackFace + soft : kBackFace; };
-    auto reach_of = [&](const ModelObject& o) { return o.compliant ? reach + soft : reach; };
+    auto in_of = [&](uint16_t o) { return model.objects[o].compliant ? soft.of(o) + reach : 0.0; };
+    auto back_of = [&](uint16_t o) { return kBackFace + in_of(o); };
+    auto reach_of = [&](uint16_t o) { return reach + in_of(o); };
     // Whether a constraint normal points within 60 degrees of the push (true without a push).
     const double push_len = glm::length(push);
     auto along_push = [&](const Vec3& n) { return !(push_len > 0.0) || glm::dot(n, push) >= 0.5 * push_len; };
@@ -673,11 +679,17 @@ void gather_atoms(const Model& model, const Pose& base, double reach, double sof
         const auto& t = obj.mesh.triangles[nt.tri];
         const Vec3 &p0 = obj.mesh.vertices[t[0]], &p1 = obj.mesh.vertices[t[1]], &p2 = obj.mesh.vertices[t[2]];
         const Vec3& n = obj.topology.triangle_normals[nt.tri];
-        const double back = back_of(obj), far = reach_of(obj);
+        const double back = back_of(nt.object), far = reach_of(nt.object);
         const ToolPiece& piece = tool.pieces[nt.piece];
+        // No point further than `far` from the triangle's bounding sphere is within `far` of it.
+        const Vec3 centre = (p0 + p1 + p2) / 3.0;
+        const double sphere = std::sqrt(std::max({glm::dot(p0 - centre, p0 - centre), glm::dot(p1 - centre, p1 - centre),
+                                                  glm::dot(p2 - centre, p2 - centre)})) + far;
         for (int a = int(piece.vertex_begin); a < int(piece.vertex_begin + piece.vertex_count); ++a) {
             const double plane = glm::dot(n, w.tool_world[a] - p0);
             if (plane > reach || plane < -back) continue;
+            const Vec3 off = w.tool_world[a] - centre;
+            if (glm::dot(off, off) > sphere * sphere) continue;
             const TriClosest c = closest_on_triangle(w.tool_world[a], p0, p1, p2);
             if (c.distance > far) continue;
             FeatureKey key{static_cast<uint32_t>(a), nt.object, 0, nt.tri};
@@ -753,7 +765,7 @@ void gather_atoms(const Model& model, const Pose& base, double reach, double sof
         const FeatureKey& k = w.feats[i];
         const ModelObject& obj = model.objects[k.object];
         const Vec3& wa = w.tool_world[k.a];
-        const double back = back_of(obj);
+        const double back = back_of(k.object);
         if (k.type == 0) {
             add_atom(w, vf_atom(k.object, k.a, k.id));
         } else if (k.type == 1) {
@@ -847,7 +859,7 @@ void gather_atoms(const Model& model, const Pose& base, double reach, double sof
                     best = f;
                 }
             }
-            if (best < 0 || best_s > reach || best_s < -back_of(obj)) continue;
+            if (best < 0 || best_s > reach || best_s < -back_of(w.overts[i].object)) continue;
             // Inside a compliant object: only a vertex pressing the way the object pushes back
             // (the tool face's normal against the push) holds the tool.
             if (obj.compliant && best_s < -kBackFace && !along_push(-w.face_n[best])) continue;
@@ -887,7 +899,8 @@ void gather_atoms(const Model& model, const Pose& base, double reach, double sof
         Aabb local;
         local.grow(base_inv * (v0 - base.position));
         local.grow(base_inv * (v1 - base.position));
-        local.inflate(reach_of(obj) + 1e-12);
+        const double far = reach_of(w.oedges[i].object);
+        local.inflate(far + 1e-12);
         int hits = 0;
         piece.edge_bvh.query(local, [&](uint32_t e) {
             w.edge_hits[hits++] = piece.edge_begin + e;
@@ -897,7 +910,7 @@ void gather_atoms(const Model& model, const Pose& base, double reach, double sof
         // A segment is no closer to the tool edge than the distance from its midpoint less its
         // half length: a cheap bound before the exact closest points.
         const Vec3 mid_o = 0.5 * (v0 + v1);
-        const double near_o = reach_of(obj) + 0.5 * glm::length(eo);
+        const double near_o = far + 0.5 * glm::length(eo);
         for (int h = 0; h < hits; ++h) {
             const uint32_t te = w.edge_hits[h];
             const Vec3& a0 = w.tool_world[tool.edges[te][0]];
@@ -908,7 +921,7 @@ void gather_atoms(const Model& model, const Pose& base, double reach, double sof
             const Vec3 gap = off - along * et;
             if (glm::dot(gap, gap) > near_o * near_o) continue;
             const SegmentClosest sc = closest_segments(a0, a1, v0, v1);
-            if (sc.distance > reach_of(obj)) continue;
+            if (sc.distance > far) continue;
             if (sc.s <= 1e-9 || sc.s >= 1.0 - 1e-9 || sc.t <= 1e-9 || sc.t >= 1.0 - 1e-9) continue;
             const Vec3 u = glm::cross(eo, et);
             const double ul = glm::length(u);
@@ -925,7 +938,7 @@ void gather_atoms(const Model& model, const Pose& base, double reach, double sof
             }
             // The tool edge behind the object edge is across the solid from it: not a contact.
             const double behind = sign * glm::dot(u / ul, a0 - v0);
-            if (behind < -back_of(obj)) continue;
+            if (behind < -back_of(w.oedges[i].object)) continue;
             // Inside a compliant object: only an edge pressed the way the object pushes back
             // holds the tool (not one that is in by going past the side of a corner).
             if (obj.compliant && behind < -kBackFace && !along_push(sign * u / ul)) continue;
@@ -1161,6 +1174,14 @@ double slot_depth(const Slacks& sl, int slot, const double* x) {
     double d = 0.0;
     for (int v = sl.first[slot]; v < sl.first[slot] + sl.count[slot]; ++v) d += x[v];
     return d;
+}
+
+// How deep the chosen candidate's solution is in each compliant object.
+SoftDepths best_soft_depths(const Workspace& w) {
+    SoftDepths s;
+    for (int i = 0; i < w.best_count; ++i)
+        if (w.best_slot[i] >= 0) s.add(w.best[i].object, w.best_slacks.depth[w.best_slot[i]]);
+    return s;
 }
 
 // Depth of a zone in a solution, 0 when it has no slack there.
@@ -1480,6 +1501,38 @@ bool solve_candidates(const Model& model, const Pose& base, const Mat3& frame, c
     return found;
 }
 
+// Whether some triangle of object o comes within `within` of world point p.
+bool near_surface(const ModelObject& o, const Vec3& p, double within) {
+    Aabb box;
+    box.grow(p);
+    box.inflate(within);
+    bool hit = false;
+    o.bvh.query(box, [&](uint32_t tri) {
+        const auto& t = o.mesh.triangles[tri];
+        hit = closest_on_triangle(p, o.mesh.vertices[t[0]], o.mesh.vertices[t[1]], o.mesh.vertices[t[2]]).distance <= within;
+        return !hit;
+    });
+    return hit;
+}
+
+// Whether the piece of the tool holding tool vertex `v` comes within `within` of triangle `tri`
+// of object o, the tool at pose `at`.
+bool piece_meets_triangle(const Model& model, uint32_t v, const ModelObject& o, uint32_t tri, const ToolPoseAt& at,
+                          double within) {
+    const ModelTool& tool = model.tool;
+    for (const ToolPiece& piece : tool.pieces) {
+        if (v < piece.vertex_begin || v >= piece.vertex_begin + piece.vertex_count) continue;
+        const auto& t = o.mesh.triangles[tri];
+        const Mat3 Rt = glm::transpose(at.R);
+        const Vec3 a = Rt * (o.mesh.vertices[t[0]] - at.p), b = Rt * (o.mesh.vertices[t[1]] - at.p),
+                   c = Rt * (o.mesh.vertices[t[2]] - at.p);
+        return convex_triangle_distance(tool.mesh.vertices.data() + piece.vertex_begin, int(piece.vertex_count), a, b, c,
+                                        within, 0.01 * within, 64, nullptr)
+                   .lower <= within;
+    }
+    return false;
+}
+
 // Whether world point m lies on the contact: on the tool's surface and on an object's surface,
 // both within `tol` (a compliant object's surface within tol + give: the tool is that far in).
 bool on_contact(const Model& model, const Workspace& w, const Vec3& m, double tol, double give) {
@@ -1496,21 +1549,8 @@ bool on_contact(const Model& model, const Workspace& w, const Vec3& m, double to
         }
     }
     if (!on_tool) return false;
-    bool hit = false;
-    for (const ModelObject& o : model.objects) {
-        const double within = o.compliant ? tol + give : tol;
-        Aabb box;
-        box.grow(m);
-        box.inflate(within);
-        o.bvh.query(box, [&](uint32_t tri) {
-            const auto& t = o.mesh.triangles[tri];
-            if (closest_on_triangle(m, o.mesh.vertices[t[0]], o.mesh.vertices[t[1]], o.mesh.vertices[t[2]]).distance <=
-                within)
-                hit = true;
-            return !hit;
-        });
-        if (hit) return true;
-    }
+    for (const ModelObject& o : model.objects)
+        if (near_surface(o, m, o.compliant ? tol + give : tol)) return true;
     return false;
 }
 
@@ -1589,9 +1629,22 @@ ContactCheck check_contacts(const Model& model, const Pose& base, const double x
             d = closest_segments(at.p + at.R * tool.mesh.vertices[te[0]], at.p + at.R * tool.mesh.vertices[te[1]],
                                  o.mesh.vertices[e.v[0]], o.mesh.vertices[e.v[1]]).distance;
         }
-        // In a compliant zone the tool is `give` inside the surface it touches.
-        if (std::abs(d - give) > 10.0 * tol) c.any_virtual = true;
-        else c.real = true;
+        // In a compliant zone the tool is `give` inside the surface it touches. That surface is
+        // every face of the zone moved in, not one face's plane, so the contact is real too when
+        // the feature is deeper than `give` in the other, or when the tool vertex is within
+        // `give` of any face of the object. A separating plane of the guard holds the piece off
+        // its triangle: real when the piece meets the triangle, wherever the vertex on the plane
+        // is (a long tool's edge laid across the face).
+        bool real = std::abs(d - give) <= 10.0 * tol;
+        if (!real && o.compliant && give > 0.0) {
+            real = d < give;
+            if (!real && (a.kind == AtomKind::VertexFace || a.kind == AtomKind::FixedAxis))
+                real = near_surface(o, at.p + at.R * tool.mesh.vertices[a.tool_vertex], give + 10.0 * tol);
+            if (!real && a.kind == AtomKind::FixedAxis)
+                real = piece_meets_triangle(model, a.tool_vertex, o, a.object_triangle, at, give + 10.0 * tol);
+        }
+        if (real) c.real = true;
+        else c.any_virtual = true;
     }
     c.virtual_only = touching && !c.real;
     return c;
@@ -1704,6 +1757,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     const Vec3 push = state.graphic.position - state.last_haptic.position;
     Vec3 moved(0.0);   // translation of earlier passes of this tick
     Vec3 turned(0.0);  // their rotation (sum of rotation vectors: a first-order account)
+    w.soft = state.soft;
 
     double scale = 1.0;
     double xh[6], target[6], target_local[6], lower[6], upper[6];
@@ -1723,6 +1777,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             turned += Vec3(x_sol[3], x_sol[4], x_sol[5]);
             base.position = at.p;
             base.orientation = at.q;
+            w.soft = best_soft_depths(w);
             solved = false;
             scale = 1.0;
         }
@@ -1765,7 +1820,8 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                 reach = box_reach(S, model.tool.radius_m, straight_lo, straight_hi);
                 // In contact at the last tick, the tool moves freely only when nothing at all is
                 // in reach of the path: the first triangle found settles it.
-                if (!gather_near(model, base, w.tool_world, straight_lo, straight_hi, reach, w, state.active_count > 0)) {
+                if (!gather_near(model, base, w.tool_world, straight_lo, straight_hi, reach, w,
+                                 state.active_count > 0)) {
                     scale *= 0.5;
                     stage_detect += micros(t0, Clock::now());
                     continue;
@@ -1793,7 +1849,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             stage_detect += micros(t0, t_detect_end);
 
             // ---- gather ----
-            gather_atoms(model, base, reach, model.any_compliant ? state.soft_depth_m + reach : 0.0, push, w);
+            gather_atoms(model, base, reach, push, w);
             t_gather_end = Clock::now();
             stage_gather += micros(t_detect_end, t_gather_end);
             res.stats.atoms_gathered = w.atom_count;
@@ -1824,7 +1880,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                     scale *= 0.5;
                     continue;
                 }
-                gather_atoms(model, base, reach, model.any_compliant ? state.soft_depth_m + reach : 0.0, push, w);
+                gather_atoms(model, base, reach, push, w);
                 solved = false;
                 for (int round = 0; round < 2 && !solved; ++round) {
                     const double recover = round == 0 ? 0.0 : 10.0 * S.constraint_tol_m;
@@ -1840,9 +1896,11 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
         if (!solved || free_motion || !check_contacts(model, base, x_sol, w).any_virtual) break;
         ++res.stats.passes;
     }
+    bool base_stands = false;
     if (!solved && res.stats.passes > 0) {
         // A later pass found nothing better: its base, the earlier pass's answer, stands.
         solved = true;
+        base_stands = true;
         for (double& v : x_sol) v = 0.0;
     }
     if (solved && !free_motion && res.stats.passes > 0 && check_contacts(model, base, x_sol, w).virtual_only) {
@@ -1909,7 +1967,11 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     state.graphic = graphic;
     state.last_haptic = haptic;
     // A held tick keeps the last pose, and with it how deep it is in a compliant zone.
-    if (solved) state.soft_depth_m = res.contacts > 0 ? res.stats.soft_depth_m : 0.0;
+    if (solved) {
+        state.soft_depth_m = res.contacts > 0 ? res.stats.soft_depth_m : 0.0;
+        // The base (an earlier pass's answer) stands where the last pass found nothing better.
+        state.soft = res.contacts == 0 ? SoftDepths{} : base_stands ? w.soft : best_soft_depths(w);
+    }
     state.sliding = res.contacts > 0 && sliding;
     ++state.ticks;
     cache.session = state.session;

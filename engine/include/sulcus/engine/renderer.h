@@ -288,6 +288,40 @@ struct StepResult {
     StepStats stats;
 };
 
+// How deep the tool is in each compliant object it has entered (m): per object, its deepest zone
+// giving way at a solution. An object not listed is not entered. At most one entry per slack
+// variable of the QP, so a solution's objects always fit.
+inline constexpr int kMaxSoftObjects = qp::kMaxVars - qp::kPoseVars;
+
+struct SoftDepths {
+    int count = 0;
+    uint16_t object[kMaxSoftObjects] = {};
+    double depth_m[kMaxSoftObjects] = {};
+
+    double of(uint16_t o) const {
+        for (int i = 0; i < count; ++i)
+            if (object[i] == o) return depth_m[i];
+        return 0.0;
+    }
+    // Keeps the deeper of what is there and `d` for object o.
+    void add(uint16_t o, double d) {
+        for (int i = 0; i < count; ++i)
+            if (object[i] == o) {
+                if (d > depth_m[i]) depth_m[i] = d;
+                return;
+            }
+        if (count < kMaxSoftObjects) {
+            object[count] = o;
+            depth_m[count++] = d;
+        }
+    }
+    double deepest() const {
+        double d = 0.0;
+        for (int i = 0; i < count; ++i) d = depth_m[i] > d ? depth_m[i] : d;
+        return d;
+    }
+};
+
 struct State {
     Pose graphic;
     bool initialized = false;
@@ -295,6 +329,7 @@ struct State {
     Atom active[kMaxActiveAtoms];
     Pose last_haptic;
     double soft_depth_m = 0.0;  // deepest compliant zone at the last tick's solution
+    SoftDepths soft;            // how deep the tool is in each compliant object there
     bool sliding = false;       // friction: the tool slid (kinetic) at the last tick
     // Which session this is (distinct per make_state) and how many ticks it has stepped: the step
     // carries what it learnt from tick to tick (RendererSettings::near_cache) only along one
