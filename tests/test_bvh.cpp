@@ -174,12 +174,9 @@ TEST(Bvh, CapsuleChainsVisitEveryTriangleWithinReachOnce) {
         const Bvh bvh(m, 4);
         for (int q = 0; q < 60; ++q) {
             const CapsuleChain chain = random_chain(rng, 6, 0.15, 0.02);
-            const int count = chain.count;
-            const std::vector<Vec3>& points = chain.points;
-            const std::vector<double>& radii = chain.radii;
-            const double extra = chain.extra;
             std::vector<int> seen(n, 0);
-            EXPECT_TRUE(bvh.query_capsule_chain(points.data(), radii.data(), count, extra, [&](uint32_t t) {
+            EXPECT_TRUE(bvh.query_capsule_chain(chain.points.data(), chain.radii.data(), chain.count, chain.extra,
+                                                [&](uint32_t t) {
                 ++seen[t];
                 return true;
             }));
@@ -187,10 +184,10 @@ TEST(Bvh, CapsuleChainsVisitEveryTriangleWithinReachOnce) {
                 EXPECT_LE(seen[t], 1) << "triangle " << t;
                 const auto& tr = m.triangles[t];
                 double d = 1e300;
-                for (int k = 0; k < count; ++k)
-                    d = std::min(d, segment_triangle_distance(points[size_t(k)], points[size_t(k) + 1], m.vertices[tr[0]],
-                                                              m.vertices[tr[1]], m.vertices[tr[2]]) -
-                                        radii[size_t(k)] - extra);
+                for (int k = 0; k < chain.count; ++k)
+                    d = std::min(d, segment_triangle_distance(chain.points[size_t(k)], chain.points[size_t(k) + 1],
+                                                              m.vertices[tr[0]], m.vertices[tr[1]], m.vertices[tr[2]]) -
+                                        chain.radii[size_t(k)] - chain.extra);
                 if (d <= 0.0) {
                     ++near;
                     EXPECT_EQ(seen[t], 1) << "triangle " << t << " within reach";
@@ -213,19 +210,15 @@ TEST(Bvh, CapsuleChainWalkInSlicesVisitsWhatTheWholeQueryVisits) {
     int slices_total = 0;
     for (int q = 0; q < 40; ++q) {
         const CapsuleChain chain = random_chain(rng, 5, 0.2, 0.03);
-        const int count = chain.count;
-        const std::vector<Vec3>& points = chain.points;
-        const std::vector<double>& radii = chain.radii;
-        const double extra = chain.extra;
         std::vector<uint32_t> whole, sliced;
-        bvh.query_capsule_chain(points.data(), radii.data(), count, extra, [&](uint32_t t) {
+        bvh.query_capsule_chain(chain.points.data(), chain.radii.data(), chain.count, chain.extra, [&](uint32_t t) {
             whole.push_back(t);
             return true;
         });
         for (long slice : {1L, 7L, 100L}) {
             sliced.clear();
             CapsuleChainWalk walk;
-            walk.start(points.data(), radii.data(), count, extra);
+            walk.start(chain.points.data(), chain.radii.data(), chain.count, chain.extra);
             bool done = false;
             int slices = 0;
             while (!done && slices < 1000000) {

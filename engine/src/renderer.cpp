@@ -241,17 +241,27 @@ void set_tool_planes(const Model& model, const Quat& q, const Vec3& p, Workspace
 
 double box_reach(const RendererSettings& S, double tool_radius, const double lower[6], const double upper[6]);
 
+// A sphere round triangle (a, b, e): centred on its centroid, through its furthest vertex.
+struct TriangleSphere {
+    Vec3 centre;
+    double radius;
+};
+
+TriangleSphere triangle_sphere(const Vec3& a, const Vec3& b, const Vec3& e) {
+    const Vec3 centre = (a + b + e) / 3.0;
+    return {centre, std::sqrt(std::max({glm::dot(a - centre, a - centre), glm::dot(b - centre, b - centre),
+                                        glm::dot(e - centre, e - centre)}))};
+}
+
 // A lower bound on the distance between capsule k (axis p0-p1, radius r) and triangle (a, b, e):
 // the triangle's bounding sphere against the capsule. Nearly exact for the small triangles of a
 // dense mesh.
 double capsule_triangle_lower(const Vec3& p0, const Vec3& p1, double r, const Vec3& a, const Vec3& b, const Vec3& e) {
-    const Vec3 centre = (a + b + e) / 3.0;
-    const double radius = std::sqrt(
-        std::max({glm::dot(a - centre, a - centre), glm::dot(b - centre, b - centre), glm::dot(e - centre, e - centre)}));
-    const Vec3 d = p1 - p0, off = centre - p0;
+    const TriangleSphere ts = triangle_sphere(a, b, e);
+    const Vec3 d = p1 - p0, off = ts.centre - p0;
     const double dd = glm::dot(d, d);
     const double s = dd > 0.0 ? std::clamp(glm::dot(off, d) / dd, 0.0, 1.0) : 0.0;
-    return glm::length(off - s * d) - radius - r;
+    return glm::length(off - s * d) - ts.radius - r;
 }
 
 // A lower bound on the distance between a piece with capsules and triangle (a, b, c) of normal n:
@@ -682,13 +692,12 @@ void gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         const double back = back_of(nt.object), far = reach_of(nt.object);
         const ToolPiece& piece = tool.pieces[nt.piece];
         // No point further than `far` from the triangle's bounding sphere is within `far` of it.
-        const Vec3 centre = (p0 + p1 + p2) / 3.0;
-        const double sphere = std::sqrt(std::max({glm::dot(p0 - centre, p0 - centre), glm::dot(p1 - centre, p1 - centre),
-                                                  glm::dot(p2 - centre, p2 - centre)})) + far;
+        const TriangleSphere ts = triangle_sphere(p0, p1, p2);
+        const double sphere = ts.radius + far;
         for (int a = int(piece.vertex_begin); a < int(piece.vertex_begin + piece.vertex_count); ++a) {
             const double plane = glm::dot(n, w.tool_world[a] - p0);
             if (plane > reach || plane < -back) continue;
-            const Vec3 off = w.tool_world[a] - centre;
+            const Vec3 off = w.tool_world[a] - ts.centre;
             if (glm::dot(off, off) > sphere * sphere) continue;
             const TriClosest c = closest_on_triangle(w.tool_world[a], p0, p1, p2);
             if (c.distance > far) continue;
@@ -1516,21 +1525,18 @@ bool near_surface(const ModelObject& o, const Vec3& p, double within) {
 }
 
 // Whether the piece of the tool holding tool vertex `v` comes within `within` of triangle `tri`
-// of object o, the tool at pose `at`.
+// of object o, the tool at pose `at` (measured in the tool's frame).
 bool piece_meets_triangle(const Model& model, uint32_t v, const ModelObject& o, uint32_t tri, const ToolPoseAt& at,
                           double within) {
     const ModelTool& tool = model.tool;
-    for (const ToolPiece& piece : tool.pieces) {
-        if (v < piece.vertex_begin || v >= piece.vertex_begin + piece.vertex_count) continue;
-        const auto& t = o.mesh.triangles[tri];
-        const Mat3 Rt = glm::transpose(at.R);
-        const Vec3 a = Rt * (o.mesh.vertices[t[0]] - at.p), b = Rt * (o.mesh.vertices[t[1]] - at.p),
-                   c = Rt * (o.mesh.vertices[t[2]] - at.p);
-        return convex_triangle_distance(tool.mesh.vertices.data() + piece.vertex_begin, int(piece.vertex_count), a, b, c,
-                                        within, 0.01 * within, 64, nullptr)
-                   .lower <= within;
-    }
-    return false;
+    const ToolPiece& piece = tool.pieces[tool.vertex_piece[v]];
+    const auto& t = o.mesh.triangles[tri];
+    const Mat3 Rt = glm::transpose(at.R);
+    const Vec3 a = Rt * (o.mesh.vertices[t[0]] - at.p), b = Rt * (o.mesh.vertices[t[1]] - at.p),
+               c = Rt * (o.mesh.vertices[t[2]] - at.p);
+    return convex_triangle_distance(tool.mesh.vertices.data() + piece.vertex_begin, int(piece.vertex_count), a, b, c,
+                                    within, 0.01 * within, 64, nullptr)
+               .lower <= within;
 }
 
 // Whether world point m lies on the contact: on the tool's surface and on an object's surface,
@@ -1967,11 +1973,8 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     state.graphic = graphic;
     state.last_haptic = haptic;
     // A held tick keeps the last pose, and with it how deep it is in a compliant zone.
-    if (solved) {
-        state.soft_depth_m = res.contacts > 0 ? res.stats.soft_depth_m : 0.0;
-        // The base (an earlier pass's answer) stands where the last pass found nothing better.
-        state.soft = res.contacts == 0 ? SoftDepths{} : base_stands ? w.soft : best_soft_depths(w);
-    }
+    // The base (an earlier pass's answer) stands where the last pass found nothing better.
+    if (solved) state.soft = res.contacts == 0 ? SoftDepths{} : base_stands ? w.soft : best_soft_depths(w);
     state.sliding = res.contacts > 0 && sliding;
     ++state.ticks;
     cache.session = state.session;

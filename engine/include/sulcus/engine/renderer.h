@@ -315,11 +315,6 @@ struct SoftDepths {
             depth_m[count++] = d;
         }
     }
-    double deepest() const {
-        double d = 0.0;
-        for (int i = 0; i < count; ++i) d = depth_m[i] > d ? depth_m[i] : d;
-        return d;
-    }
 };
 
 struct State {
@@ -328,8 +323,7 @@ struct State {
     int active_count = 0;
     Atom active[kMaxActiveAtoms];
     Pose last_haptic;
-    double soft_depth_m = 0.0;  // deepest compliant zone at the last tick's solution
-    SoftDepths soft;            // how deep the tool is in each compliant object there
+    SoftDepths soft;            // how deep the tool is in each compliant object at the last tick's solution
     bool sliding = false;       // friction: the tool slid (kinetic) at the last tick
     // Which session this is (distinct per make_state) and how many ticks it has stepped: the step
     // carries what it learnt from tick to tick (RendererSettings::near_cache) only along one
