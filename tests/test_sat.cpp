@@ -161,6 +161,8 @@ void gjk_brackets_the_distance(const TriMesh& tool_mesh, double scale, unsigned 
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     const auto* tris = piece_triangles(tool, 0);
     int separated = 0, overlapping = 0, touching_close = 0;
+    long warm_iterations = 0, cold_iterations = 0;
+    GjkSimplex last;
     for (int t = 0; t < 3000; ++t) {
         const Quat q = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
         pt.place(q, Vec3(u(rng) * scale, u(rng) * scale, u(rng) * scale));
@@ -193,7 +195,33 @@ void gjk_brackets_the_distance(const TriMesh& tool_mesh, double scale, unsigned 
         const DistanceBounds cut = convex_triangle_distance(verts.data(), int(verts.size()), a, b, d, 0.5 * exact);
         EXPECT_LE(cut.lower, exact + 1e-13);
         EXPECT_GE(cut.lower, std::min(0.5 * exact, g.lower) - 1e-13);
+        // Warm-started from any simplex - the same pair's own, the last trial's (another pose and
+        // triangle), or indices made up, some out of range - the bounds are as good as cold.
+        GjkSimplex junk;
+        junk.count = uint8_t(rng() % 5);
+        for (int i = 0; i < 4; ++i) {
+            junk.tri[i] = uint8_t(rng() % 4);
+            junk.poly[i] = uint16_t(rng() % (verts.size() + 3));
+        }
+        for (const GjkSimplex* warm : {&g.simplex, static_cast<const GjkSimplex*>(&last), static_cast<const GjkSimplex*>(&junk)}) {
+            const DistanceBounds w = convex_triangle_distance(verts.data(), int(verts.size()), a, b, d, 1e300, 1e-13,
+                                                              64, nullptr, warm);
+            ASSERT_LE(w.lower, exact + 1e-13) << "trial " << t;
+            ASSERT_GE(w.upper, exact - 1e-13) << "trial " << t;
+            if (exact > 0.0) EXPECT_NEAR(w.lower, exact, 1e-12) << "trial " << t;
+            else EXPECT_EQ(w.lower, 0.0) << "trial " << t;
+        }
+        // Its own simplex settles the same pair at once.
+        if (g.simplex.count > 0) {
+            const DistanceBounds again = convex_triangle_distance(verts.data(), int(verts.size()), a, b, d, 1e300,
+                                                                  1e-13, 64, nullptr, &g.simplex);
+            EXPECT_LE(again.iterations, std::max(g.iterations, 2)) << "trial " << t;
+            warm_iterations += again.iterations;
+            cold_iterations += g.iterations;
+        }
+        last = g.simplex;
     }
+    EXPECT_LT(warm_iterations, cold_iterations);
     EXPECT_GT(separated, 300);
     EXPECT_GT(overlapping, 300);
     EXPECT_GT(touching_close, 50);

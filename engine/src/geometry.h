@@ -74,6 +74,16 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
 // Stops once the lower bound reaches `cutoff` (callers after the least distance over many
 // triangles pass the least so far) or the bounds are within `tolerance` (m) of each other. The
 // lower bound is a separating gap along a direction, so it holds whatever rounding did.
+//
+// The simplex GJK ends on names, for each of its points, the polytope vertex and the triangle
+// vertex whose difference it is. A search for the same pair at a nearby pose can start from it
+// (`warm`): the points are taken at the new pose, so whatever it holds only changes where the
+// search starts, never a bound.
+struct GjkSimplex {
+    uint8_t count = 0;
+    uint8_t tri[4] = {};
+    uint16_t poly[4] = {};
+};
 struct DistanceBounds {
     double lower = 0.0;
     double upper = 1e300;
@@ -81,16 +91,18 @@ struct DistanceBounds {
     // The last search direction (from the triangle towards the polytope; zero when they touch):
     // a good hint for the same pair at a nearby pose.
     Vec3 direction{0.0};
+    GjkSimplex simplex;  // the last simplex (count 0 when the hint alone settled it)
 };
 // `hint`, when given, is a direction roughly from the triangle towards the polytope: the search
-// starts there.
+// starts there; `warm`, when it has points, is the simplex an earlier search ended on (indices
+// out of range are ignored).
 DistanceBounds convex_triangle_distance(const Vec3* poly, int count, const Vec3& a, const Vec3& b, const Vec3& c,
                                         double cutoff = 1e300, double tolerance = 1e-13, int max_iterations = 64,
-                                        const Vec3* hint = nullptr);
+                                        const Vec3* hint = nullptr, const GjkSimplex* warm = nullptr);
 // The same for a polytope's view (its vertices).
 DistanceBounds convex_triangle_distance(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c,
                                         double cutoff = 1e300, double tolerance = 1e-13, int max_iterations = 64,
-                                        const Vec3* hint = nullptr);
+                                        const Vec3* hint = nullptr, const GjkSimplex* warm = nullptr);
 
 // Distance between the convex polytope and a triangle: 0 when they touch or overlap; to within
 // 1e-13 m (GJK), or exactly from the polytope's triangles when rounding stalls GJK. With a

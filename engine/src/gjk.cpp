@@ -14,13 +14,20 @@ namespace sulcus {
 
 namespace {
 
+// A point of D with the polytope vertex and triangle vertex it is the difference of.
+struct Point {
+    Vec3 p;
+    uint16_t ia = 0;
+    uint8_t ib = 0;
+};
+
 struct Simplex {
-    Vec3 p[4];
+    Point p[4];
     int n = 0;
 };
 
 // The point of D least along v (the support of D in -v).
-inline Vec3 support_least(const Vec3* poly, int count, const Vec3 tri[3], const Vec3& v) {
+inline Point support_least(const Vec3* poly, int count, const Vec3 tri[3], const Vec3& v) {
     int ia = 0;
     double best = glm::dot(v, poly[0]);
     for (int i = 1; i < count; ++i) {
@@ -39,12 +46,12 @@ inline Vec3 support_least(const Vec3* poly, int count, const Vec3 tri[3], const 
             ib = k;
         }
     }
-    return poly[ia] - tri[ib];
+    return Point{poly[ia] - tri[ib], static_cast<uint16_t>(ia), static_cast<uint8_t>(ib)};
 }
 
 // Closest point to the origin of segment a-b; reduces the simplex to the feature holding it.
 Vec3 closest_segment(Simplex& s) {
-    const Vec3 a = s.p[0], b = s.p[1];
+    const Vec3 a = s.p[0].p, b = s.p[1].p;
     const Vec3 ab = b - a;
     const double den = glm::dot(ab, ab);
     const double t = den > 0.0 ? -glm::dot(a, ab) / den : 0.0;
@@ -53,7 +60,7 @@ Vec3 closest_segment(Simplex& s) {
         return a;
     }
     if (t >= 1.0) {
-        s.p[0] = b;
+        s.p[0] = s.p[1];
         s.n = 1;
         return b;
     }
@@ -63,13 +70,13 @@ Vec3 closest_segment(Simplex& s) {
 // Closest point to the origin of triangle a, b, c; reduces the simplex likewise. A triangle
 // with no area is taken as its longest edge.
 Vec3 closest_triangle(Simplex& s) {
-    const Vec3 a = s.p[0], b = s.p[1], c = s.p[2];
+    const Vec3 a = s.p[0].p, b = s.p[1].p, c = s.p[2].p;
     const Vec3 nrm = glm::cross(b - a, c - a);
     const double scale = std::max({glm::dot(b - a, b - a), glm::dot(c - a, c - a), glm::dot(c - b, c - b)});
     if (glm::dot(nrm, nrm) <= 1e-24 * scale * scale) {
         const double ab = glm::dot(b - a, b - a), ac = glm::dot(c - a, c - a), bc = glm::dot(c - b, c - b);
-        if (ac >= ab && ac >= bc) s.p[1] = c;
-        else if (bc >= ab && bc >= ac) s.p[0] = c;
+        if (ac >= ab && ac >= bc) s.p[1] = s.p[2];
+        else if (bc >= ab && bc >= ac) s.p[0] = s.p[2];
         s.n = 2;
         return closest_segment(s);
     }
@@ -79,12 +86,12 @@ Vec3 closest_triangle(Simplex& s) {
             // Along the normal: its direction does not suffer the cancellation of a small point
             // found from large ones, which would cost the lower bound its last digits.
             return nrm * (glm::dot(nrm, a) / glm::dot(nrm, nrm));
-        case TriRegion::Edge0: s.n = 2; break;                       // a b
-        case TriRegion::Edge1: s.p[0] = c; s.n = 2; break;           // c b
-        case TriRegion::Edge2: s.p[1] = c; s.n = 2; break;           // a c
+        case TriRegion::Edge0: s.n = 2; break;                            // a b
+        case TriRegion::Edge1: s.p[0] = s.p[2]; s.n = 2; break;           // c b
+        case TriRegion::Edge2: s.p[1] = s.p[2]; s.n = 2; break;           // a c
         case TriRegion::Vertex0: s.n = 1; break;
-        case TriRegion::Vertex1: s.p[0] = b; s.n = 1; break;
-        case TriRegion::Vertex2: s.p[0] = c; s.n = 1; break;
+        case TriRegion::Vertex1: s.p[0] = s.p[1]; s.n = 1; break;
+        case TriRegion::Vertex2: s.p[0] = s.p[2]; s.n = 1; break;
     }
     return tc.point;
 }
@@ -98,7 +105,7 @@ Vec3 closest_tetrahedron(Simplex& s, bool& inside) {
     Simplex best_s;
     Vec3 best_p(0.0);
     for (const auto& f : kFace) {
-        const Vec3 &a = s.p[f[0]], &b = s.p[f[1]], &c = s.p[f[2]], &d = s.p[f[3]];
+        const Vec3 &a = s.p[f[0]].p, &b = s.p[f[1]].p, &c = s.p[f[2]].p, &d = s.p[f[3]].p;
         const Vec3 nrm = glm::cross(b - a, c - a);
         const double so = -glm::dot(nrm, a);     // origin's side
         const double sd = glm::dot(nrm, d - a);  // the fourth vertex's side
@@ -106,9 +113,9 @@ Vec3 closest_tetrahedron(Simplex& s, bool& inside) {
         if (!(so * sd < 0.0) && !(sd == 0.0)) continue;
         outside_any = true;
         Simplex t;
-        t.p[0] = a;
-        t.p[1] = b;
-        t.p[2] = c;
+        t.p[0] = s.p[f[0]];
+        t.p[1] = s.p[f[1]];
+        t.p[2] = s.p[f[2]];
         t.n = 3;
         const Vec3 q = closest_triangle(t);
         const double d2 = glm::dot(q, q);
@@ -126,29 +133,72 @@ Vec3 closest_tetrahedron(Simplex& s, bool& inside) {
     return best_p;
 }
 
-}  // namespace
+// Closest point to the origin of the simplex (of any size), reducing it as above.
+Vec3 closest_simplex(Simplex& s, bool& inside) {
+    inside = false;
+    if (s.n == 1) return s.p[0].p;
+    if (s.n == 2) return closest_segment(s);
+    if (s.n == 3) return closest_triangle(s);
+    return closest_tetrahedron(s, inside);
+}
 
-namespace {
+GjkSimplex names_of(const Simplex& s) {
+    GjkSimplex g;
+    g.count = static_cast<uint8_t>(s.n);
+    for (int k = 0; k < s.n; ++k) {
+        g.poly[k] = s.p[k].ia;
+        g.tri[k] = s.p[k].ib;
+    }
+    return g;
+}
 
 DistanceBounds distance_bounds(const Vec3* poly, int count, const Vec3& a, const Vec3& b, const Vec3& c, double cutoff,
-                                      double tolerance, int max_iterations, const Vec3* hint) {
+                               double tolerance, int max_iterations, const Vec3* hint, const GjkSimplex* warm) {
     DistanceBounds r;
     const Vec3 tri[3] = {a, b, c};
     Simplex s;
     // From the hint, the point of D least along it: often its gap already settles the cutoff.
-    s.p[0] = hint && glm::dot(*hint, *hint) > 0.0 ? support_least(poly, count, tri, *hint) : poly[0] - a;
+    const bool hinted = hint && glm::dot(*hint, *hint) > 0.0;
+    s.p[0] = hinted ? support_least(poly, count, tri, *hint) : Point{poly[0] - a, 0, 0};
     s.n = 1;
-    Vec3 v = s.p[0];
+    Vec3 v = s.p[0].p;
     double lower = 0.0;
-    if (hint && glm::dot(*hint, *hint) > 0.0) {
+    if (hinted) {
         // The gap along the hint itself.
-        lower = std::max(0.0, glm::dot(*hint, s.p[0]) / glm::length(*hint));
+        lower = std::max(0.0, glm::dot(*hint, s.p[0].p) / glm::length(*hint));
         r.lower = lower;
         r.direction = *hint;
         if (lower >= cutoff) return r;
     }
+    if (warm && warm->count > 0 && warm->count <= 4) {
+        // The earlier simplex, its points taken at this pose (repeats dropped); it starts the
+        // search where it is nearer than the hint's point.
+        Simplex ws;
+        for (int k = 0; k < warm->count; ++k) {
+            if (warm->poly[k] >= count || warm->tri[k] > 2) continue;
+            const Point q{poly[warm->poly[k]] - tri[warm->tri[k]], warm->poly[k], warm->tri[k]};
+            bool known = false;
+            for (int j = 0; j < ws.n; ++j) known |= ws.p[j].ia == q.ia && ws.p[j].ib == q.ib;
+            if (!known) ws.p[ws.n++] = q;
+        }
+        if (ws.n > 0) {
+            bool inside = false;
+            const Vec3 wv = closest_simplex(ws, inside);
+            if (inside) {
+                r.lower = r.upper = 0.0;
+                r.direction = Vec3(0.0);
+                r.simplex = names_of(ws);
+                return r;
+            }
+            if (glm::dot(wv, wv) < glm::dot(v, v)) {
+                s = ws;
+                v = wv;
+            }
+        }
+    }
     for (int it = 0; it < max_iterations; ++it) {
         r.iterations = it + 1;
+        r.simplex = names_of(s);
         const double vv = glm::dot(v, v);
         if (vv == 0.0) {
             r.lower = r.upper = 0.0;
@@ -156,31 +206,25 @@ DistanceBounds distance_bounds(const Vec3* poly, int count, const Vec3& a, const
             return r;
         }
         const double vl = std::sqrt(vv);
-        const Vec3 w = support_least(poly, count, tri, v);
+        const Point w = support_least(poly, count, tri, v);
         // Every point z of D has v.z >= v.w: the gap along v bounds the distance.
-        lower = std::max(lower, glm::dot(v, w) / vl);
+        lower = std::max(lower, glm::dot(v, w.p) / vl);
         r.lower = lower;
         r.upper = vl;
         r.direction = v;
         if (lower >= cutoff || vl - lower <= tolerance) return r;
         // w adds nothing the simplex has: no further progress is possible.
         bool known = false;
-        for (int k = 0; k < s.n; ++k) known |= s.p[k] == w;
+        for (int k = 0; k < s.n; ++k) known |= s.p[k].p == w.p;
         if (known) return r;
         s.p[s.n++] = w;
-        Vec3 next;
-        if (s.n == 2) {
-            next = closest_segment(s);
-        } else if (s.n == 3) {
-            next = closest_triangle(s);
-        } else {
-            bool inside = false;
-            next = closest_tetrahedron(s, inside);
-            if (inside) {
-                r.lower = r.upper = 0.0;
-                r.direction = Vec3(0.0);
-                return r;
-            }
+        bool inside = false;
+        const Vec3 next = closest_simplex(s, inside);
+        if (inside) {
+            r.lower = r.upper = 0.0;
+            r.direction = Vec3(0.0);
+            r.simplex = names_of(s);
+            return r;
         }
         // Rounding can stall the descent: the bounds so far stand.
         if (!(glm::dot(next, next) < vv)) return r;
@@ -192,13 +236,15 @@ DistanceBounds distance_bounds(const Vec3* poly, int count, const Vec3& a, const
 }  // namespace
 
 DistanceBounds convex_triangle_distance(const Vec3* poly, int count, const Vec3& a, const Vec3& b, const Vec3& c,
-                                        double cutoff, double tolerance, int max_iterations, const Vec3* hint) {
-    return distance_bounds(poly, count, a, b, c, cutoff, tolerance, max_iterations, hint);
+                                        double cutoff, double tolerance, int max_iterations, const Vec3* hint,
+                                        const GjkSimplex* warm) {
+    return distance_bounds(poly, count, a, b, c, cutoff, tolerance, max_iterations, hint, warm);
 }
 
 DistanceBounds convex_triangle_distance(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c,
-                                        double cutoff, double tolerance, int max_iterations, const Vec3* hint) {
-    return distance_bounds(poly.vertices, poly.vertex_count, a, b, c, cutoff, tolerance, max_iterations, hint);
+                                        double cutoff, double tolerance, int max_iterations, const Vec3* hint,
+                                        const GjkSimplex* warm) {
+    return distance_bounds(poly.vertices, poly.vertex_count, a, b, c, cutoff, tolerance, max_iterations, hint, warm);
 }
 
 }  // namespace sulcus
