@@ -1,13 +1,18 @@
 // The step's near cache (RendererSettings::near_cache) changes what the step measures, not what it
 // finds: with and without it, the bench scenes' probing gives the same graphic poses, forces and
-// statuses bit for bit. And what it carries from tick to tick stays within one session: sessions
+// statuses bit for bit, and the same near set on ticks of one pass. A later pass narrows the
+// earlier pass's near set: it keeps every triangle the pass's box can reach but may leave out
+// ones only a fresh detect's looser reach takes in, so there its set is no larger. And what it carries from tick to tick stays within one session: sessions
 // interleaved on one thread, or a session run again after another, repeat their lone runs exactly.
 #include "cli/bench_scenes.h"
 #include "sulcus/engine/renderer.h"
+#include "near_cache.h"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -20,13 +25,14 @@ struct Tick {
     Vec3 force, torque;
     StepStatus status;
     int near;
+    int passes;
 };
 
 bool same_bits(const Tick& a, const Tick& b) {
     return std::memcmp(&a.graphic.position, &b.graphic.position, sizeof(Vec3)) == 0 &&
            std::memcmp(&a.graphic.orientation, &b.graphic.orientation, sizeof(Quat)) == 0 &&
            std::memcmp(&a.force, &b.force, sizeof(Vec3)) == 0 && std::memcmp(&a.torque, &b.torque, sizeof(Vec3)) == 0 &&
-           a.status == b.status && a.near == b.near;
+           a.status == b.status && a.passes == b.passes && (a.passes > 0 ? a.near <= b.near : a.near == b.near);
 }
 
 cli::BenchScene load(const std::string& name) {
@@ -48,7 +54,7 @@ std::unique_ptr<Model> model_for(const cli::BenchScene& b, bool near_cache) {
 }
 
 Tick tick_of(const StepResult& r) {
-    return Tick{r.graphic, r.force_N, r.torque_Nm, r.status, r.stats.triangles_near};
+    return Tick{r.graphic, r.force_N, r.torque_Nm, r.status, r.stats.triangles_near, r.stats.passes};
 }
 
 std::vector<Tick> run(const Model& model, const std::vector<Pose>& poses, size_t count) {
@@ -58,12 +64,19 @@ std::vector<Tick> run(const Model& model, const std::vector<Pose>& poses, size_t
     return out;
 }
 
-// Where two runs first differ (-1: nowhere).
+// Where run `a` (with the cache) first differs from run `b` (without) (-1: nowhere).
 long first_difference(const std::vector<Tick>& a, const std::vector<Tick>& b) {
     if (a.size() != b.size()) return 0;
     for (size_t i = 0; i < a.size(); ++i)
         if (!same_bits(a[i], b[i])) return long(i);
     return -1;
+}
+
+// Ticks where the cached run's near set is smaller than the fresh one's.
+int narrower_ticks(const std::vector<Tick>& a, const std::vector<Tick>& b) {
+    int n = 0;
+    for (size_t i = 0; i < a.size() && i < b.size(); ++i) n += a[i].near < b[i].near;
+    return n;
 }
 
 int contact_ticks(const std::vector<Tick>& t) {
@@ -79,6 +92,7 @@ void expect_cache_changes_nothing(const std::string& name, size_t count) {
     const std::vector<Tick> a = run(*with, b.ticks, count), c = run(*without, b.ticks, count);
     EXPECT_GT(contact_ticks(a), 100) << name;  // the probe is in contact for much of the run
     EXPECT_EQ(first_difference(a, c), -1) << name;
+    EXPECT_GT(narrower_ticks(a, c), 0) << name;  // later passes were narrowed
 }
 
 }  // namespace
@@ -134,4 +148,68 @@ TEST(NearCache, InterleavedSessionsRepeatTheirLoneRuns) {
         with_copy.push_back(tick_of(step(*model, a, first[i])));
     }
     EXPECT_EQ(first_difference(with_copy, alone_first), -1);
+}
+
+// box_motion_bound: no point within the radius of the tool's origin moves further from the earlier
+// pose to any pose of the box than the bound, for boxes and earlier poses of every lay-out the
+// passes of a tick meet (turns of the box against the way from there included), and the bound is
+// not loose by more than a small factor.
+TEST(BoxMotionBound, NoPointOfTheBoxMovesFurther) {
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    auto rand_vec = [&](double s) { return s * Vec3(u(rng), u(rng), u(rng)); };
+    const double radius = 0.02;
+    double worst = 0.0, loosest = 1e300;
+    for (int trial = 0; trial < 2000; ++trial) {
+        Pose from;
+        from.position = rand_vec(0.05);
+        from.orientation = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+        const Vec3 way_turn = rand_vec(0.03);
+        Pose at;
+        // Pure turns in every other trial: there the turns' composition is all the bound has.
+        const bool turns_only = trial % 2 == 0;
+        at.position = from.position + (turns_only ? Vec3(0.0) : rand_vec(1e-3));
+        at.orientation = glm::normalize(quat_exp(way_turn) * from.orientation);
+        const Mat3 frame = glm::mat3_cast(glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng))));
+        double lower[6], upper[6];
+        // Box turns about the way back in a third of the trials: where composing turns matters most.
+        const Vec3 back = trial % 3 < 2 ? -(glm::transpose(frame) * way_turn) : Vec3(0.0);
+        for (int j = 0; j < 6; ++j) {
+            const double c = j < 3 ? 0.0 : back[j - 3];
+            const double s = j < 3 ? (turns_only ? 0.0 : 1e-3) : 0.02;
+            const double a = c + s * u(rng), b = c + s * u(rng);
+            lower[j] = std::min(a, b);
+            upper[j] = std::max(a, b);
+        }
+        const double bound = box_motion_bound(radius, from, at, frame, lower, upper);
+        ASSERT_TRUE(std::isfinite(bound)) << "trial " << trial;
+        double most = 0.0;
+        for (int i = 0; i < 200; ++i) {
+            double x[6];
+            for (int j = 0; j < 6; ++j) {
+                const bool corner = i < 64;
+                const double f = corner ? double((i >> j) & 1) : 0.5 * (u(rng) + 1.0);
+                x[j] = lower[j] + f * (upper[j] - lower[j]);
+            }
+            const Vec3 p = at.position + frame * Vec3(x[0], x[1], x[2]);
+            const Quat q = glm::normalize(quat_exp(frame * Vec3(x[3], x[4], x[5])) * at.orientation);
+            for (int n = 0; n < 8; ++n) {
+                Vec3 a = rand_vec(1.0);
+                a *= radius / std::max(glm::length(a), 1e-12) * (n < 6 ? 1.0 : 0.5 * (u(rng) + 1.0));
+                most = std::max(most, glm::length((p + q * a) - (from.position + from.orientation * a)));
+            }
+        }
+        ASSERT_LE(most, bound) << "trial " << trial;
+        worst = std::max(worst, most / bound);
+        loosest = std::min(loosest, most / bound);
+    }
+    EXPECT_GT(worst, 0.8);     // some trials come close to the bound
+    EXPECT_GT(loosest, 0.25);  // and none is loose by more than 4x
+}
+
+// Turns beyond the bound's small-angle reasoning give no bound.
+TEST(BoxMotionBound, LargeTurnsGiveNoBound) {
+    Pose from, at;
+    const double lower[6] = {0, 0, 0, -0.2, 0, 0}, upper[6] = {0, 0, 0, 0.2, 0, 0};
+    EXPECT_TRUE(std::isinf(box_motion_bound(0.01, from, at, Mat3(1.0), lower, upper)));
 }

@@ -5,6 +5,7 @@
 // never step over a contact, however thin the wall or fast the motion.
 #pragma once
 
+#include "geometry.h"
 #include "sulcus/engine/renderer.h"
 
 #include <limits>
@@ -25,9 +26,12 @@ struct NearTriangle {
     // needed it (NaN before): no point moving by d changes the separation by more than d, so it
     // bounds the separation at any nearby pose.
     double separation_m = std::numeric_limits<double>::quiet_NaN();
+    // An upper bound on their distance there (from GJK; 1e300 when not measured).
+    double upper_m = 1e300;
     // Roughly the direction from the triangle towards the piece (world; zero when unknown): where
     // a distance search between them starts.
     Vec3 direction{0.0};
+    GjkSimplex simplex{};  // where a GJK search between them ended (count 0 when unknown)
 };
 
 struct CcdResult {

@@ -17,11 +17,14 @@
 
 #include "sulcus/engine/bvh.h"
 #include "sulcus/engine/renderer.h"
+#include "geometry.h"
 #include "so3.h"
 
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
+#include <algorithm>
 
 namespace sulcus {
 
@@ -36,6 +39,7 @@ struct NearCacheEntry {
     double lo = 0.0;     // bounds on the triangle's distance from the piece there (m)
     double hi = 1e300;
     Vec3 direction{0.0};  // GJK's last direction there (world; zero if none): the next search's start
+    GjkSimplex simplex{};  // and the simplex it ended on
 };
 
 struct PieceNearCache {
@@ -89,6 +93,40 @@ inline double motion_bound(const ToolPiece& piece, const Pose& from, const Pose&
     const Vec3 a = from.position + from.orientation * piece.centre, b = to.position + to.orientation * piece.centre;
     const double turn = glm::length(quat_log(to.orientation * glm::conjugate(from.orientation)));
     return glm::length(b - a) + turn * piece.spread_m + 1e-12 + 1e-13 * (glm::length(b) + piece.spread_m);
+}
+
+// How far no point within `radius` of the tool's origin moves from pose `from` to any pose of the
+// step's box [lower, upper] about pose `at` (coordinates in `frame`: a pose x of the box is
+// at.position + frame x[0..2], Exp(frame x[3..5]) at.orientation). Each such pose is a motion from
+// `from` too: by the box shifted by the way from there, since a turn composed with a turn differs
+// from their sum by less than the product of their angles, for turns this small. +infinity for
+// turns over 0.1 rad.
+inline double box_motion_bound(double radius, const Pose& from, const Pose& at, const Mat3& frame,
+                               const double lower[6], const double upper[6]) {
+    const Vec3 d = glm::transpose(frame) * (at.position - from.position);
+    const Vec3 r = glm::transpose(frame) * quat_log(at.orientation * glm::conjugate(from.orientation));
+    double move2 = 0.0, shifted_turn2 = 0.0, turn2 = 0.0;
+    for (int j = 0; j < 3; ++j) {
+        const double m = std::max(std::abs(lower[j] + d[j]), std::abs(upper[j] + d[j]));
+        const double t = std::max(std::abs(lower[3 + j] + r[j]), std::abs(upper[3 + j] + r[j]));
+        const double u = std::max(std::abs(lower[3 + j]), std::abs(upper[3 + j]));
+        move2 += m * m;
+        shifted_turn2 += t * t;
+        turn2 += u * u;
+    }
+    const double turn = std::sqrt(turn2), turned = glm::length(r);
+    if (!(turn <= 0.1) || !(turned <= 0.1)) return std::numeric_limits<double>::infinity();
+    const double angle = std::sqrt(shifted_turn2) + turned * turn;
+    return (std::sqrt(move2) + angle * radius) * (1.0 + 1e-9) + 1e-12;
+}
+
+// What a distance known to lie in [lo - motion, hi + motion] settles about a triangle at reach
+// `reach`: out (GJK to `tol` could not keep it), in (nor drop it), or open (measure it).
+enum class Settled { Open, In, Out };
+inline Settled settle(double lo, double hi, double motion, double reach, double tol) {
+    if (lo - motion > reach + tol) return Settled::Out;
+    if (hi + motion <= reach) return Settled::In;
+    return Settled::Open;
 }
 
 inline bool same_pose(const Pose& a, const Pose& b) {

@@ -179,6 +179,17 @@ struct Workspace {
     Vec3 capsule[kMaxToolPieces * (kToolCapsules + 1)];  // the pieces' bounding capsules at that pose
     NearTri near[kMaxNear];
     int near_count = 0;
+    // Whether `near` holds every triangle within each piece's reach `near_reach` of it at
+    // `near_pose` (the last detect was complete, not narrowed from an earlier one).
+    bool near_complete = false;
+    Pose near_pose;
+    double near_reach[kMaxToolPieces] = {};
+    // A complete near set of an earlier pass of the tick, which a later pass narrows where it
+    // covers the pass's box (prior_* as near_* above).
+    NearTri prior[kMaxNear];
+    int prior_count = 0;
+    Pose prior_pose;
+    double prior_reach[kMaxToolPieces] = {};
     int tests = 0;  // triangle tests of this tick (StepStats::triangles_tested)
     FeatureKey feats[kMaxFeatures];
     int feat_count = 0;
@@ -253,11 +264,10 @@ TriangleSphere triangle_sphere(const Vec3& a, const Vec3& b, const Vec3& e) {
                                         glm::dot(e - centre, e - centre)}))};
 }
 
-// A lower bound on the distance between capsule k (axis p0-p1, radius r) and triangle (a, b, e):
-// the triangle's bounding sphere against the capsule. Nearly exact for the small triangles of a
+// A lower bound on the distance between capsule k (axis p0-p1, radius r) and a triangle: the
+// triangle's bounding sphere `ts` against the capsule. Nearly exact for the small triangles of a
 // dense mesh.
-double capsule_triangle_lower(const Vec3& p0, const Vec3& p1, double r, const Vec3& a, const Vec3& b, const Vec3& e) {
-    const TriangleSphere ts = triangle_sphere(a, b, e);
+double capsule_sphere_lower(const Vec3& p0, const Vec3& p1, double r, const TriangleSphere& ts) {
     const Vec3 d = p1 - p0, off = ts.centre - p0;
     const double dd = glm::dot(d, d);
     const double s = dd > 0.0 ? std::clamp(glm::dot(off, d) / dd, 0.0, 1.0) : 0.0;
@@ -272,9 +282,10 @@ double piece_capsule_bound(const ToolPiece& piece, const Vec3* axis, const Vec3&
                            const Vec3& n, int& nearest) {
     double bound = 1e300;
     nearest = 0;
+    const TriangleSphere ts = triangle_sphere(a, b, c);
     for (int j = 0; j < piece.capsule_count; ++j) {
         const double r = piece.capsule_radii_m[size_t(j)];
-        double bj = capsule_triangle_lower(axis[j], axis[j + 1], r, a, b, c);
+        double bj = capsule_sphere_lower(axis[j], axis[j + 1], r, ts);
         const double h0 = glm::dot(n, axis[j] - a), h1 = glm::dot(n, axis[j + 1] - a);
         if (h0 * h1 > 0.0) bj = std::max(bj, std::min(std::abs(h0), std::abs(h1)) - r);
         if (bj < bound) {
@@ -294,11 +305,12 @@ struct NearVerdict {
     double lo = 0.0;
     double hi = 1e300;
     Vec3 direction{0.0};
+    GjkSimplex simplex{};
 };
 
 NearVerdict judge_near(const Model& model, size_t k, const ConvexView& view, const Vec3* axis, const ModelObject& obj,
                        uint32_t tri, double reach, double tol, bool capsules_only, double cutoff = 0.0,
-                       const Vec3* start = nullptr) {
+                       const Vec3* start = nullptr, const GjkSimplex* warm = nullptr) {
     const ToolPiece& piece = model.tool.pieces[k];
     const auto& t = obj.mesh.triangles[tri];
     const Vec3 &a = obj.mesh.vertices[t[0]], &b = obj.mesh.vertices[t[1]], &c = obj.mesh.vertices[t[2]];
@@ -311,12 +323,12 @@ NearVerdict judge_near(const Model& model, size_t k, const ConvexView& view, con
     const double dd = glm::dot(d, d);
     const double s = dd > 0.0 ? std::clamp(glm::dot(centre - axis[nearest], d) / dd, 0.0, 1.0) : 0.0;
     const Vec3 hint = start && glm::dot(*start, *start) > 0.0 ? *start : axis[nearest] + s * d - centre;
-    DistanceBounds g = convex_triangle_distance(view, a, b, c, std::max(reach, cutoff), tol, 64, &hint);
+    DistanceBounds g = convex_triangle_distance(view, a, b, c, std::max(reach, cutoff), tol, 64, &hint, warm);
     if (g.lower <= reach && g.upper - g.lower > tol) {
         g.lower = g.upper = distance_convex_triangle_by_faces(view, piece_triangles(model.tool, k),
                                                               int(piece.triangle_count), a, b, c);
     }
-    return NearVerdict{g.lower <= reach, std::max(bound, g.lower), g.upper, g.direction};
+    return NearVerdict{g.lower <= reach, std::max(bound, g.lower), g.upper, g.direction, g.simplex};
 }
 
 // How much further than the tick's reach a piece's superset reaches: the tool can move that far
@@ -444,6 +456,19 @@ PieceNearCache* piece_superset(const Model& model, NearCache& c, size_t k, const
     return &pc;
 }
 
+// Whether the earlier pass's complete near set (Workspace::prior) holds every triangle piece k can
+// reach from pose `at` within the box [lower, upper] of the step's coordinates (in `frame`): when
+// no point of the piece moves further from the prior's pose (box_motion_bound), with the contact
+// distance and the tolerance's room, than the prior's reach, nothing the piece reaches now lies
+// outside the prior set.
+bool prior_covers(const Model& model, size_t k, const Pose& at, const Mat3& frame, const double lower[6],
+                  const double upper[6], const Workspace& w) {
+    const RendererSettings& S = model.settings;
+    const double need = box_motion_bound(model.tool.pieces[k].radius_m, w.prior_pose, at, frame, lower, upper) +
+                        S.contact_distance_m + 20.0 * S.constraint_tol_m;
+    return need <= w.prior_reach[k];
+}
+
 // detect: the triangles each piece of the tool can reach within the box [lower, upper] of the
 // step's coordinates, each with a lower bound on its distance from the piece (for the guard).
 // Against a rigid object a long piece (a probe's tip or shank) is bounded by its capsules: the BVH
@@ -457,11 +482,17 @@ PieceNearCache* piece_superset(const Model& model, NearCache& c, size_t k, const
 // the tool enters) gives the triangles whose boxes meet the piece's box inflated by the tool's
 // reach `reach_all`: gather_atoms looks among them for the face that holds a tool vertex inside
 // it. A compact piece takes the triangles in its box inflated by its reach. With `any_only`, stops
-// at the first triangle the capsules' bound keeps. Needs the tool's vertices, planes and capsules
-// placed at pose `at` (set_tool_planes). False on overflow.
+// at the first triangle the capsules' bound keeps. With `prior_frame` (the frame of the box), a
+// piece whose reach the earlier pass's near set covers (prior_covers) takes its triangles from
+// that set, measured again only where the motion since leaves their verdict open. Needs the
+// tool's vertices, planes and capsules placed at pose `at` (set_tool_planes). False on overflow.
 bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, const double lower[6],
-                 const double upper[6], double reach_all, Workspace& w, bool any_only = false) {
+                 const double upper[6], double reach_all, Workspace& w, bool any_only = false,
+                 const Mat3* prior_frame = nullptr) {
     w.near_count = 0;
+    w.near_complete = false;
+    bool narrowed = false;
+    int prior_cursor = 0;  // w.prior is grouped by piece, then object, both in order
     bool overflow = false;
     auto push = [&](const NearTri& nt) {
         if (w.near_count >= kMaxNear) {
@@ -481,12 +512,18 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
         const uint8_t pk = static_cast<uint8_t>(k);
         // How far this piece's points can move within the box.
         const double reach = box_reach(model.settings, piece.radius_m, lower, upper);
+        w.near_reach[k] = reach;
         const Vec3* axis = w.capsule + k * (kToolCapsules + 1);
         Aabb box;
         for (uint32_t v = piece.vertex_begin; v < piece.vertex_begin + piece.vertex_count; ++v) box.grow(tool_world[v]);
         const ConvexView view = tool_view(model, k, tool_world, w);
-        PieceNearCache* pc =
-            use_cache && piece.capsule_count > 0 ? piece_superset(model, cache, k, at, axis, reach, tol) : nullptr;
+        const bool from_prior = prior_frame && !any_only && piece.capsule_count > 0 &&
+                                prior_covers(model, k, at, *prior_frame, lower, upper, w);
+        narrowed |= from_prior;
+        const double prior_motion = from_prior ? motion_bound(piece, w.prior_pose, at) : 0.0;
+        PieceNearCache* pc = use_cache && piece.capsule_count > 0 && !from_prior
+                                 ? piece_superset(model, cache, k, at, axis, reach, tol)
+                                 : nullptr;
         int cursor = 0;  // pc's entries are grouped by object, in object order
         for (size_t o = 0; o < model.objects.size(); ++o) {
             const ModelObject& obj = model.objects[o];
@@ -499,10 +536,11 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                     if (piece.capsule_count > 0) {
                         const auto& t = obj.mesh.triangles[tri];
                         bound = 1e300;
+                        const TriangleSphere ts =
+                            triangle_sphere(obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]);
                         for (int c = 0; c < piece.capsule_count; ++c)
-                            bound = std::min(bound, capsule_triangle_lower(axis[c], axis[c + 1], piece.capsule_radii_m[size_t(c)],
-                                                                           obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
-                                                                           obj.mesh.vertices[t[2]]));
+                            bound = std::min(bound,
+                                             capsule_sphere_lower(axis[c], axis[c + 1], piece.capsule_radii_m[size_t(c)], ts));
                     }
                     return push(NearTri{ok, tri, pk, bound});
                 });
@@ -511,14 +549,43 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                 continue;
             }
             const int run = w.near_count;
-            auto keep = [&](uint32_t tri, double lo, const Vec3& direction) {
+            auto keep = [&](uint32_t tri, double lo, double hi, const Vec3& direction, const GjkSimplex& simplex) {
                 NearTri nt{ok, tri, pk, lo};
+                nt.upper_m = hi;
                 // The distance where they are apart is the start separation the guard needs.
                 if (lo > 0.0) nt.separation_m = lo;
                 nt.direction = direction;
+                nt.simplex = simplex;
                 return push(nt);
             };
-            if (pc) {
+            if (from_prior) {
+                // The earlier pass's triangles of this piece and object, with their bounds there
+                // widened by the motion since: kept or dropped where that settles it, else
+                // measured.
+                auto before = [&](const NearTri& q) { return q.piece < pk || (q.piece == pk && q.object < ok); };
+                while (prior_cursor < w.prior_count && before(w.prior[prior_cursor])) ++prior_cursor;
+                for (; prior_cursor < w.prior_count && w.prior[prior_cursor].piece == pk &&
+                       w.prior[prior_cursor].object == ok && !overflow;
+                     ++prior_cursor) {
+                    const NearTri& q = w.prior[prior_cursor];
+                    const Settled verdict = settle(q.lower_m, q.upper_m, prior_motion, reach, tol);
+                    if (verdict == Settled::Out) continue;
+                    if (verdict == Settled::In) {
+                        NearTri nt{ok, q.tri, pk, q.lower_m - prior_motion};
+                        nt.upper_m = q.upper_m + prior_motion;
+                        nt.direction = q.direction;
+                        nt.simplex = q.simplex;
+                        if (!push(nt)) break;
+                        continue;
+                    }
+                    const NearVerdict v =
+                        judge_near(model, k, view, axis, obj, q.tri, reach, tol, false, 2.0 * reach, &q.direction,
+                                   &q.simplex);
+                    if (v.keep)
+                        keep(q.tri, v.lo, v.hi, glm::dot(v.direction, v.direction) > 0.0 ? v.direction : q.direction,
+                             v.simplex.count > 0 ? v.simplex : q.simplex);
+                }
+            } else if (pc) {
                 for (; cursor < pc->count && pc->entries[cursor].object == ok && !overflow; ++cursor) {
                     NearCacheEntry& e = pc->entries[cursor];
                     double m;
@@ -527,13 +594,15 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                         // current pose (widened by the motion since), rather than being measured
                         // again once forgotten.
                         const bool rebase = cache.stamp - e.stamp >= uint64_t(kNearCacheSlots / 2);
-                        const bool out = e.lo - m > reach + tol;  // GJK could not keep it
-                        const bool in = !out && e.hi + m <= reach;  // nor drop it
+                        const Settled verdict = settle(e.lo, e.hi, m, reach, tol);
+                        const bool out = verdict == Settled::Out, in = verdict == Settled::In;
                         if (in) {
                             // A bound this old is too loose for the guard: it measures the
                             // separation itself where it needs it.
                             NearTri nt{ok, e.tri, pk, e.lo - m};
+                            nt.upper_m = e.hi + m;
                             nt.direction = e.direction;
+                            nt.simplex = e.simplex;
                             if (!push(nt)) break;
                         }
                         if (out || in) {
@@ -546,12 +615,14 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                         }
                     }
                     const NearVerdict v =
-                        judge_near(model, k, view, axis, obj, e.tri, reach, tol, false, 2.0 * reach, &e.direction);
+                        judge_near(model, k, view, axis, obj, e.tri, reach, tol, false, 2.0 * reach, &e.direction,
+                                   &e.simplex);
                     e.lo = v.lo;
                     e.hi = v.hi;
                     if (glm::dot(v.direction, v.direction) > 0.0) e.direction = v.direction;
+                    if (v.simplex.count > 0) e.simplex = v.simplex;
                     e.stamp = cache.stamp;
-                    if (v.keep) keep(e.tri, v.lo, e.direction);
+                    if (v.keep) keep(e.tri, v.lo, v.hi, e.direction, e.simplex);
                 }
             } else {
                 // Along the piece's capsules; a triangle within reach of their bound is kept only
@@ -560,7 +631,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                                             [&](uint32_t tri) {
                                                 const NearVerdict v =
                                                     judge_near(model, k, view, axis, obj, tri, reach, tol, any_only);
-                                                return v.keep ? keep(tri, v.lo, v.direction) : true;
+                                                return v.keep ? keep(tri, v.lo, v.hi, v.direction, v.simplex) : true;
                                             });
             }
             if (overflow) return false;
@@ -568,6 +639,8 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
             std::sort(w.near + run, w.near + w.near_count, [](const NearTri& x, const NearTri& y) { return x.tri < y.tri; });
         }
     }
+    w.near_complete = !any_only && !narrowed;
+    w.near_pose = at;
     return true;
 }
 
@@ -1387,7 +1460,8 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             // the separating-axis overlap when they touch.
             const ConvexView view = tool_view(model, nt.piece, w.tool_world, w);
             const Vec3* hint = glm::dot(nt.direction, nt.direction) > 0.0 ? &nt.direction : nullptr;
-            const double apart = convex_triangle_distance(view, t0, t1, t2, moved_by, 1e-13, 64, hint).lower;
+            const GjkSimplex* warm = nt.simplex.count > 0 ? &nt.simplex : nullptr;
+            const double apart = convex_triangle_distance(view, t0, t1, t2, moved_by, 1e-13, 64, hint, warm).lower;
             nt.separation_m = apart > 0.0 ? apart : separate_convex_triangle(view, t0, t1, t2).separation;
         }
         place_tool_vertices(model.tool, nx.q, nx.p, w.tool_moved);
@@ -1405,8 +1479,9 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
             // Apart (GJK finds a gap along some direction): nothing to measure.
             const Vec3& dir = w.near[i].direction;
+            const GjkSimplex& sx = w.near[i].simplex;
             if (convex_triangle_distance(moved, t0, t1, t2, std::numeric_limits<double>::min(), 1e-13, 64,
-                                         glm::dot(dir, dir) > 0.0 ? &dir : nullptr)
+                                         glm::dot(dir, dir) > 0.0 ? &dir : nullptr, sx.count > 0 ? &sx : nullptr)
                     .lower > 0.0)
                 continue;
             const SatResult sat = separate_convex_triangle(moved, t0, t1, t2);
@@ -1776,7 +1851,16 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
 
     // A solution held on an extended plane (its contact is not real) becomes the base of another
     // pass of the stages within the tick, so the tool comes round the feature instead of hanging.
+    bool have_prior = false;
     for (int pass = 0; pass < kMaxPasses; ++pass) {
+        if (pass > 0 && w.near_complete && model.settings.near_cache) {
+            // The last complete near set: the next pass narrows it where it covers that pass's box.
+            std::copy(w.near, w.near + w.near_count, w.prior);
+            w.prior_count = w.near_count;
+            w.prior_pose = w.near_pose;
+            std::copy(w.near_reach, w.near_reach + kMaxToolPieces, w.prior_reach);
+            have_prior = true;
+        }
         if (pass > 0) {
             const ToolPoseAt at = tool_pose_at(base, x_sol);
             moved += at.p - base.position;
@@ -1845,7 +1929,8 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             }
             // In contact: what the force-continuity box can reach.
             reach = box_reach(S, model.tool.radius_m, rate_lower, rate_upper);
-            if (!gather_near(model, base, w.tool_world, rate_lower, rate_upper, reach, w)) {
+            const Mat3* prior_frame = have_prior ? &frame : nullptr;
+            if (!gather_near(model, base, w.tool_world, rate_lower, rate_upper, reach, w, false, prior_frame)) {
                 scale *= 0.5;
                 stage_detect += micros(t0, Clock::now());
                 continue;
@@ -1881,7 +1966,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             if (solved && !cc.real && !cc.virtual_only && !at_target) {
                 res.stats.released = true;
                 reach = box_reach(S, model.tool.radius_m, lower, upper);
-                if (!gather_near(model, base, w.tool_world, lower, upper, reach, w)) {
+                if (!gather_near(model, base, w.tool_world, lower, upper, reach, w, false, prior_frame)) {
                     solved = false;
                     scale *= 0.5;
                     continue;

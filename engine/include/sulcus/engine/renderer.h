@@ -59,8 +59,9 @@ struct RendererSettings {
     // Distance under which the tool and an object count as touching (for contact statistics).
     double contact_distance_m = 1e-6;
     // Keep what detect measured about the triangles around each tool piece from tick to tick and
-    // measure again only those whose verdict the tool's motion since could have changed. Changes
-    // the step's cost, not its results (off: every tick measures from scratch).
+    // measure again only those whose verdict the tool's motion since could have changed; a later
+    // pass of a tick likewise narrows the earlier pass's near set. Changes the step's cost, not its
+    // results (off: every tick and pass measures from scratch).
     bool near_cache = true;
     qp::Settings qp;
 };
