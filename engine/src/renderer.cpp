@@ -23,6 +23,7 @@
 #include "ccd.h"
 #include "contact_atoms.h"
 #include "near_cache.h"
+#include "radix_sort.h"
 #include "geometry.h"
 #include "so3.h"
 #include "tool_placement.h"
@@ -117,18 +118,15 @@ struct Inside {
     double facing;
 };
 
-// An object vertex or edge near a piece of the tool.
-struct ObjFeature {
-    uint16_t object;
-    uint32_t id;
-    uint8_t piece;
-    bool operator<(const ObjFeature& o) const {
-        if (object != o.object) return object < o.object;
-        if (id != o.id) return id < o.id;
-        return piece < o.piece;
-    }
-    bool operator==(const ObjFeature& o) const { return object == o.object && id == o.id && piece == o.piece; }
-};
+// An object vertex or edge near a piece of the tool, packed so that the keys sort by object,
+// then feature, then piece.
+using ObjFeature = uint64_t;
+inline ObjFeature obj_feature(uint16_t object, uint32_t id, uint8_t piece) {
+    return uint64_t(object) << 40 | uint64_t(id) << 8 | piece;
+}
+inline uint16_t feature_object(ObjFeature f) { return uint16_t(f >> 40); }
+inline uint32_t feature_id(ObjFeature f) { return uint32_t(f >> 8); }
+inline uint8_t feature_piece(ObjFeature f) { return uint8_t(f); }
 
 // An alternative principal contact: atoms[replace] swapped for `atom`.
 struct Alt {
@@ -198,6 +196,7 @@ struct Workspace {
     ObjFeature overts[kMaxFeatures];
     int overt_count = 0;
     ObjFeature oedges[kMaxFeatures];
+    ObjFeature feature_scratch[kMaxFeatures];
     int oedge_count = 0;
     Atom atoms[kMaxAtoms];
     int atom_count = 0;
@@ -794,9 +793,9 @@ void gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             }
         }
         for (int k = 0; k < 3; ++k) {
-            if (w.overt_count < kMaxFeatures) w.overts[w.overt_count++] = ObjFeature{nt.object, t[k], nt.piece};
+            if (w.overt_count < kMaxFeatures) w.overts[w.overt_count++] = obj_feature(nt.object, t[k], nt.piece);
             if (w.oedge_count < kMaxFeatures)
-                w.oedges[w.oedge_count++] = ObjFeature{nt.object, obj.topology.triangle_edges[nt.tri][k], nt.piece};
+                w.oedges[w.oedge_count++] = obj_feature(nt.object, obj.topology.triangle_edges[nt.tri][k], nt.piece);
         }
     }
     std::sort(w.feats, w.feats + w.feat_count);
@@ -921,16 +920,15 @@ void gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
 
     // Convex object vertices against tool faces (F-V, Type 11): outside the face of each piece
     // most in front.
-    std::sort(w.overts, w.overts + w.overt_count);
-    w.overt_count = static_cast<int>(std::unique(w.overts, w.overts + w.overt_count) - w.overts);
+    w.overt_count = radix_sort_unique(w.overts, w.feature_scratch, w.overt_count);
     for (int i = 0; i < w.overt_count; ++i) {
-        const ModelObject& obj = model.objects[w.overts[i].object];
-        const uint32_t v = w.overts[i].id;
+        const ModelObject& obj = model.objects[feature_object(w.overts[i])];
+        const uint32_t v = feature_id(w.overts[i]);
         const Convexity cv = obj.topology.vertex_convexity[v];
         if (cv != Convexity::Convex && cv != Convexity::Mixed) continue;
         const Vec3& p = obj.mesh.vertices[v];
         {
-            const ToolPiece& piece = tool.pieces[w.overts[i].piece];
+            const ToolPiece& piece = tool.pieces[feature_piece(w.overts[i])];
             const int f0 = int(piece.face_begin), f1 = int(piece.face_begin + piece.face_count);
             int best = -1;
             double best_s = -1e300;
@@ -941,13 +939,13 @@ void gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
                     best = f;
                 }
             }
-            if (best < 0 || best_s > reach || best_s < -back_of(w.overts[i].object)) continue;
+            if (best < 0 || best_s > reach || best_s < -back_of(feature_object(w.overts[i]))) continue;
             // Inside a compliant object: only a vertex pressing the way the object pushes back
             // (the tool face's normal against the push) holds the tool.
             if (obj.compliant && best_s < -kBackFace && !along_push(-w.face_n[best])) continue;
             Atom at;
             at.kind = AtomKind::FaceVertex;
-            at.object = w.overts[i].object;
+            at.object = feature_object(w.overts[i]);
             at.object_vertex = v;
             at.tool_face = static_cast<uint32_t>(best);
             const int index = w.atom_count;
@@ -965,23 +963,22 @@ void gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
     }
 
     // Tool edges against convex object edges (E-E, Type 2) on the dynamic plane of eq. 7.
-    std::sort(w.oedges, w.oedges + w.oedge_count);
-    w.oedge_count = static_cast<int>(std::unique(w.oedges, w.oedges + w.oedge_count) - w.oedges);
+    w.oedge_count = radix_sort_unique(w.oedges, w.feature_scratch, w.oedge_count);
     for (int i = 0; i < w.oedge_count; ++i) {
-        const ModelObject& obj = model.objects[w.oedges[i].object];
-        const MeshEdge& e = obj.topology.edges[w.oedges[i].id];
+        const ModelObject& obj = model.objects[feature_object(w.oedges[i])];
+        const MeshEdge& e = obj.topology.edges[feature_id(w.oedges[i])];
         if (e.convexity != Convexity::Convex) continue;
         const Vec3& v0 = obj.mesh.vertices[e.v[0]];
         const Vec3& v1 = obj.mesh.vertices[e.v[1]];
         const Vec3 eo = v1 - v0;
         const Vec3 bisector = obj.topology.triangle_normals[e.tri[0]] + obj.topology.triangle_normals[e.tri[1]];
-        const ToolPiece& piece = tool.pieces[w.oedges[i].piece];
+        const ToolPiece& piece = tool.pieces[feature_piece(w.oedges[i])];
         // The tool edges whose boxes come within reach of the object edge's, in the tool's frame
         // (with room for the rounding of the move into it), in their order.
         Aabb local;
         local.grow(base_inv * (v0 - base.position));
         local.grow(base_inv * (v1 - base.position));
-        const double far = reach_of(w.oedges[i].object);
+        const double far = reach_of(feature_object(w.oedges[i]));
         local.inflate(far + 1e-12);
         int hits = 0;
         piece.edge_bvh.query(local, [&](uint32_t e) {
@@ -1020,14 +1017,14 @@ void gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             }
             // The tool edge behind the object edge is across the solid from it: not a contact.
             const double behind = sign * glm::dot(u / ul, a0 - v0);
-            if (behind < -back_of(w.oedges[i].object)) continue;
+            if (behind < -back_of(feature_object(w.oedges[i]))) continue;
             // Inside a compliant object: only an edge pressed the way the object pushes back
             // holds the tool (not one that is in by going past the side of a corner).
             if (obj.compliant && behind < -kBackFace && !along_push(sign * u / ul)) continue;
             Atom at;
             at.kind = AtomKind::EdgeEdge;
-            at.object = w.oedges[i].object;
-            at.object_edge = w.oedges[i].id;
+            at.object = feature_object(w.oedges[i]);
+            at.object_edge = feature_id(w.oedges[i]);
             at.tool_edge = static_cast<uint32_t>(te);
             at.sign = sign;
             add_atom(w, at);
