@@ -1444,11 +1444,19 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         // further than that from the piece there cannot be reached, nor can one whose separation
         // there (along its separating axis) leaves room for that motion. The separations at the
         // start are found once per pass, on the tool's planes there (still in place here).
+        // A compliant object's triangle comes with the capsules' bound, which bounds the
+        // separation from below where they overlap too (the piece and the triangle lie inside the
+        // capsule and the sphere, which overlap at least as deep): where that bound, less the
+        // motion, is within the zone's give, the triangle needs no test.
         const double shift = glm::length(nx.p - base.position), turn = glm::length(Vec3(x[3], x[4], x[5]));
+        auto bound_settles = [&](const NearTri& nt, double moved_by, double give) {
+            return model.objects[nt.object].compliant && nt.lower_m - moved_by >= -(S.constraint_tol_m + give);
+        };
         for (int i = 0; i < w.near_count; ++i) {
             NearTri& nt = w.near[i];
             const double moved_by = shift + turn * model.tool.pieces[nt.piece].radius_m;
             if (nt.lower_m > moved_by || !std::isnan(nt.separation_m)) continue;
+            if (bound_settles(nt, moved_by, triangle_zone_depth(model, w.slacks, nt))) continue;
             ++w.tests;
             const ModelObject& obj = model.objects[nt.object];
             const auto& t = obj.mesh.triangles[nt.tri];
@@ -1467,6 +1475,7 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             const double moved_by = shift + turn * model.tool.pieces[w.near[i].piece].radius_m;
             if (w.near[i].lower_m > moved_by) continue;
             const double give_i = triangle_zone_depth(model, w.slacks, w.near[i]);
+            if (bound_settles(w.near[i], moved_by, give_i)) continue;
             if (w.near[i].separation_m - moved_by >= -(S.constraint_tol_m + give_i)) continue;
             ++w.tests;
             const size_t k = w.near[i].piece;
