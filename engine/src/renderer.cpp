@@ -81,7 +81,8 @@ constexpr int kMaxToolEdges = 3 * kMaxToolVertices;
 static_assert(kToolCapsules <= 16, "Bvh::query_capsule_chain takes at most 16 capsules");
 constexpr int kMaxNear = 8192;
 constexpr int kMaxAtoms = 1024;
-constexpr int kMaxFeatures = 4096;
+constexpr int kMaxFeatures = 4096;  // tool vertices against object features, per gather
+constexpr int kMaxObjFeatures = 3 * kMaxNear;  // object vertices or edges: three per near triangle
 constexpr int kMaxAlts = 32;
 constexpr int kMaxHalvings = 6;
 constexpr int kMaxCcdIterations = 64;
@@ -191,12 +192,13 @@ struct Workspace {
     int tests = 0;  // triangle tests of this tick (StepStats::triangles_tested)
     FeatureKey feats[kMaxFeatures];
     int feat_count = 0;
+    bool gather_full = false;  // an atom or feature of this gather did not fit
     Inside inside[kMaxFeatures];
     int inside_count = 0;
-    ObjFeature overts[kMaxFeatures];
+    ObjFeature overts[kMaxObjFeatures];
     int overt_count = 0;
-    ObjFeature oedges[kMaxFeatures];
-    ObjFeature feature_scratch[kMaxFeatures];
+    ObjFeature oedges[kMaxObjFeatures];
+    ObjFeature feature_scratch[kMaxObjFeatures];
     int oedge_count = 0;
     Atom atoms[kMaxAtoms];
     int atom_count = 0;
@@ -654,6 +656,7 @@ bool motion_is_free(const Model& model, const Pose& base, const double x[6], dou
 
 void add_atom(Workspace& w, const Atom& a) {
     if (w.atom_count < kMaxAtoms) w.atoms[w.atom_count++] = a;
+    else w.gather_full = true;
 }
 
 void add_alt(Workspace& w, int replace, const Atom& a) {
@@ -735,8 +738,9 @@ bool in_vertex_cone(const ModelObject& obj, uint32_t v, const Vec3& p) {
 
 // gather: the principal-contact atoms of every feature pair within `reach`. The tool may be inside
 // a compliant object by as deep as it is at the base (Workspace::soft) plus the reach: that
-// object's features stay in play that far behind their surface.
-void gather_atoms(const Model& model, const Pose& base, double reach, const Vec3& push, Workspace& w) {
+// object's features stay in play that far behind their surface. False when a feature or an atom
+// did not fit (the step then tries a smaller box, as when detect overflows).
+bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3& push, Workspace& w) {
     const ModelTool& tool = model.tool;
     const SoftDepths& soft = w.soft;
     const Quat base_inv = glm::conjugate(base.orientation);
@@ -749,6 +753,7 @@ void gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
     w.atom_count = 0;
     w.alt_count = 0;
     w.feat_count = 0;
+    w.gather_full = false;
     w.tests += w.near_count;
     w.inside_count = 0;
     w.overt_count = 0;
@@ -788,14 +793,23 @@ void gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
                 if (w.inside_count < kMaxFeatures)
                     w.inside[w.inside_count++] =
                         Inside{key, plane, c.region == TriRegion::Face && plane < -kBackFace, glm::dot(n, push)};
+                else
+                    w.gather_full = true;
             } else if (w.feat_count < kMaxFeatures) {
                 w.feats[w.feat_count++] = key;
+            } else {
+                w.gather_full = true;
             }
         }
+        // Only convex object vertices (and mixed ones) and convex edges meet the tool's faces
+        // and edges (F-V and E-E below).
         for (int k = 0; k < 3; ++k) {
-            if (w.overt_count < kMaxFeatures) w.overts[w.overt_count++] = obj_feature(nt.object, t[k], nt.piece);
-            if (w.oedge_count < kMaxFeatures)
-                w.oedges[w.oedge_count++] = obj_feature(nt.object, obj.topology.triangle_edges[nt.tri][k], nt.piece);
+            const Convexity cv = obj.topology.vertex_convexity[t[k]];
+            if (cv == Convexity::Convex || cv == Convexity::Mixed)
+                w.overts[w.overt_count++] = obj_feature(nt.object, t[k], nt.piece);
+            const uint32_t edge = obj.topology.triangle_edges[nt.tri][k];
+            if (obj.topology.edges[edge].convexity == Convexity::Convex)
+                w.oedges[w.oedge_count++] = obj_feature(nt.object, edge, nt.piece);
         }
     }
     std::sort(w.feats, w.feats + w.feat_count);
@@ -822,6 +836,7 @@ void gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             if (!inside) {
                 for (int k = i; k < j; ++k)
                     if (w.feat_count < kMaxFeatures) w.feats[w.feat_count++] = w.inside[k].key;
+                    else w.gather_full = true;
             } else {
                 int best = -1;
                 for (int k = i; k < j; ++k) {
@@ -836,6 +851,7 @@ void gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
                     if (better) best = k;
                 }
                 if (best >= 0 && w.feat_count < kMaxFeatures) w.feats[w.feat_count++] = w.inside[best].key;
+                else if (best >= 0) w.gather_full = true;
             }
             i = j;
         }
@@ -1030,6 +1046,7 @@ void gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             add_atom(w, at);
         }
     }
+    return !w.gather_full;
 }
 
 // The separating plane at the step's start of a triangle that the atoms let a piece of the tool
@@ -1452,11 +1469,35 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         auto bound_settles = [&](const NearTri& nt, double moved_by, double give) {
             return model.objects[nt.object].compliant && nt.lower_m - moved_by >= -(S.constraint_tol_m + give);
         };
+        // The gap between a piece and a compliant triangle along the triangle's normal: no more
+        // than their separation where they overlap (the least overlap over all axes), nor than
+        // their distance where they are apart, so it stands in for either.
+        auto normal_gap = [&](const NearTri& nt, const Vec3* tool_vertices) {
+            const ModelObject& obj = model.objects[nt.object];
+            const ToolPiece& piece = model.tool.pieces[nt.piece];
+            const Vec3& n = obj.topology.triangle_normals[nt.tri];
+            const double t = glm::dot(n, obj.mesh.vertices[obj.mesh.triangles[nt.tri][0]]);
+            double lo = 1e300, hi = -1e300;
+            for (uint32_t v = piece.vertex_begin; v < piece.vertex_begin + piece.vertex_count; ++v) {
+                const double d = glm::dot(n, tool_vertices[v]);
+                lo = std::min(lo, d);
+                hi = std::max(hi, d);
+            }
+            return std::max(lo - t, t - hi);
+        };
         for (int i = 0; i < w.near_count; ++i) {
             NearTri& nt = w.near[i];
             const double moved_by = shift + turn * model.tool.pieces[nt.piece].radius_m;
             if (nt.lower_m > moved_by || !std::isnan(nt.separation_m)) continue;
-            if (bound_settles(nt, moved_by, triangle_zone_depth(model, w.slacks, nt))) continue;
+            const double give = triangle_zone_depth(model, w.slacks, nt);
+            if (bound_settles(nt, moved_by, give)) continue;
+            if (model.objects[nt.object].compliant) {
+                const double gap = normal_gap(nt, w.tool_world);
+                if (gap - moved_by >= -(S.constraint_tol_m + give)) {
+                    nt.separation_m = std::max(gap, nt.lower_m);
+                    continue;
+                }
+            }
             ++w.tests;
             const ModelObject& obj = model.objects[nt.object];
             const auto& t = obj.mesh.triangles[nt.tri];
@@ -1477,6 +1518,9 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             const double give_i = triangle_zone_depth(model, w.slacks, w.near[i]);
             if (bound_settles(w.near[i], moved_by, give_i)) continue;
             if (w.near[i].separation_m - moved_by >= -(S.constraint_tol_m + give_i)) continue;
+            if (model.objects[w.near[i].object].compliant &&
+                normal_gap(w.near[i], w.tool_moved) >= -(S.constraint_tol_m + give_i))
+                continue;
             ++w.tests;
             const size_t k = w.near[i].piece;
             const ConvexView moved = tool_view(model, k, w.tool_moved, w);
@@ -1946,7 +1990,11 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             stage_detect += micros(t0, t_detect_end);
 
             // ---- gather ----
-            gather_atoms(model, base, reach, push, w);
+            if (!gather_atoms(model, base, reach, push, w)) {
+                scale *= 0.5;
+                stage_gather += micros(t_detect_end, Clock::now());
+                continue;
+            }
             t_gather_end = Clock::now();
             stage_gather += micros(t_detect_end, t_gather_end);
             res.stats.atoms_gathered = w.atom_count;
@@ -1977,8 +2025,12 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                     scale *= 0.5;
                     continue;
                 }
-                gather_atoms(model, base, reach, push, w);
                 solved = false;
+                if (!gather_atoms(model, base, reach, push, w)) {
+                    scale *= 0.5;
+                    stage_solve += micros(t_gather_end, Clock::now());
+                    continue;
+                }
                 for (int round = 0; round < 2 && !solved; ++round) {
                     const double recover = round == 0 ? 0.0 : 10.0 * S.constraint_tol_m;
                     local_box(S, radius, target_local, motion_local, rotation_local, moved_local, turned_local, false,
