@@ -176,6 +176,11 @@ struct Workspace {
     double face_d[kMaxToolFaces];
     Quat face_q{1.0, 0.0, 0.0, 0.0};  // the rotation face_n was placed with
     Vec3 capsule[kMaxToolPieces * (kToolCapsules + 1)];  // the pieces' bounding capsules at that pose
+    // The same at the pose a solve moves the tool to (the guard's check there).
+    Vec3 moved_face_n[kMaxToolFaces];
+    double moved_face_d[kMaxToolFaces];
+    Quat moved_face_q{1.0, 0.0, 0.0, 0.0};
+    Vec3 moved_capsule[kMaxToolPieces * (kToolCapsules + 1)];
     NearTri near[kMaxNear];
     int near_count = 0;
     // Whether `near` holds every triangle within each piece's reach `near_reach` of it at
@@ -1510,20 +1515,30 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             const double apart = convex_triangle_distance(view, t0, t1, t2, moved_by, 1e-13, 64, hint, warm).lower;
             nt.separation_m = apart > 0.0 ? apart : separate_convex_triangle(view, t0, t1, t2).separation;
         }
-        place_tool_vertices(model.tool, nx.q, nx.p, w.tool_moved);
-        set_tool_planes(model, nx.q, nx.p, w);
+        // The tool at the new pose, placed once a triangle needs it.
+        bool moved_placed = false;
+        auto place_moved = [&] {
+            if (moved_placed) return;
+            place_tool_vertices(model.tool, nx.q, nx.p, w.tool_moved);
+            place_tool_planes(model.tool, nx.q, nx.p, w.moved_face_n, w.moved_face_d);
+            place_tool_capsule(model.tool, nx.q, nx.p, w.moved_capsule);
+            w.moved_face_q = nx.q;
+            moved_placed = true;
+        };
         for (int i = 0; i < w.near_count && missed < 8; ++i) {
             const double moved_by = shift + turn * model.tool.pieces[w.near[i].piece].radius_m;
             if (w.near[i].lower_m > moved_by) continue;
             const double give_i = triangle_zone_depth(model, w.slacks, w.near[i]);
             if (bound_settles(w.near[i], moved_by, give_i)) continue;
             if (w.near[i].separation_m - moved_by >= -(S.constraint_tol_m + give_i)) continue;
+            place_moved();
             if (model.objects[w.near[i].object].compliant &&
                 normal_gap(w.near[i], w.tool_moved) >= -(S.constraint_tol_m + give_i))
                 continue;
             ++w.tests;
             const size_t k = w.near[i].piece;
-            const ConvexView moved = tool_view(model, k, w.tool_moved, w);
+            const ConvexView moved = tool_convex_view(model.tool, k, w.tool_moved, w.moved_face_n, w.moved_face_d,
+                                                      &w.moved_face_q, w.moved_capsule);
             const ModelObject& obj = model.objects[w.near[i].object];
             const auto& t = obj.mesh.triangles[w.near[i].tri];
             const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
@@ -1541,7 +1556,6 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
                 missed_tris[missed++] = w.near[i];
             }
         }
-        set_tool_planes(model, base.orientation, base.position, w);
         if (missed == 0) {
             r.ok = true;
             for (int j = 0; j < 6; ++j) r.x[j] = x[j];
