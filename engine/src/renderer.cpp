@@ -743,8 +743,10 @@ bool in_vertex_cone(const ModelObject& obj, uint32_t v, const Vec3& p) {
 
 // gather: the principal-contact atoms of every feature pair within `reach`. The tool may be inside
 // a compliant object by as deep as it is at the base (Workspace::soft) plus the reach: that
-// object's features stay in play that far behind their surface. False when a feature or an atom
-// did not fit (the step then tries a smaller box, as when detect overflows).
+// object's features stay in play that far behind their surface. False when a tool vertex's
+// feature or an atom did not fit (deep in a compliant object): those are left out, and the
+// guard holds the tool off whatever they would have held (StepStats::gather_truncated). A
+// smaller box does not help there: the depth, not the motion, makes the set.
 bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3& push, Workspace& w) {
     const ModelTool& tool = model.tool;
     const SoftDepths& soft = w.soft;
@@ -2004,11 +2006,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             stage_detect += micros(t0, t_detect_end);
 
             // ---- gather ----
-            if (!gather_atoms(model, base, reach, push, w)) {
-                scale *= 0.5;
-                stage_gather += micros(t_detect_end, Clock::now());
-                continue;
-            }
+            res.stats.gather_truncated |= !gather_atoms(model, base, reach, push, w);
             t_gather_end = Clock::now();
             stage_gather += micros(t_detect_end, t_gather_end);
             res.stats.atoms_gathered = w.atom_count;
@@ -2039,12 +2037,8 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                     scale *= 0.5;
                     continue;
                 }
+                res.stats.gather_truncated |= !gather_atoms(model, base, reach, push, w);
                 solved = false;
-                if (!gather_atoms(model, base, reach, push, w)) {
-                    scale *= 0.5;
-                    stage_solve += micros(t_gather_end, Clock::now());
-                    continue;
-                }
                 for (int round = 0; round < 2 && !solved; ++round) {
                     const double recover = round == 0 ? 0.0 : 10.0 * S.constraint_tol_m;
                     local_box(S, radius, target_local, motion_local, rotation_local, moved_local, turned_local, false,

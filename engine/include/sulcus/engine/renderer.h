@@ -269,6 +269,9 @@ struct StepStats {
     // Extra passes of the stages this tick because a solution's contact was not real (held on
     // the extended plane of a face or the line of an edge past its end).
     int passes = 0;
+    // Gather found more tool-vertex features or atoms than it holds (deep in a compliant
+    // object): the rest were left out, and the guard held the tool off what they would have.
+    bool gather_truncated = false;
     // Compliance: zones giving way at the solution and the deepest of them (m).
     int soft_zones = 0;
     double soft_depth_m = 0.0;
