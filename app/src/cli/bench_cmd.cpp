@@ -105,15 +105,15 @@ bool write_ticks_csv(const std::string& path, const BenchRun& run) {
     if (!f) return false;
     std::fprintf(f, "tick,status,step_us,detect_us,gather_us,solve_us,select_us,force_us,triangles_near,"
                     "triangles_tested,atoms_gathered,candidates,atoms,qp_solves,qp_iterations,relinearizations,"
-                    "passes,released,regions,soft_depth_m,allocations\n");
+                    "passes,released,gather_truncated,regions,soft_depth_m,allocations\n");
     for (size_t i = 0; i < run.ticks.size(); ++i) {
         const BenchTick& t = run.ticks[i];
         const StepStats& s = t.stats;
-        std::fprintf(f, "%zu,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%.9g,%ld\n", i,
+        std::fprintf(f, "%zu,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%.9g,%ld\n", i,
                      to_string(t.status), t.step_us, s.times.detect_us, s.times.gather_us, s.times.solve_us,
                      s.times.select_us, s.times.force_us, s.triangles_near, s.triangles_tested, s.atoms_gathered,
                      s.candidates, s.atoms, s.qp_solves, s.qp_iterations, s.relinearizations, s.passes,
-                     int(s.released), s.regions, s.soft_depth_m, t.allocations);
+                     int(s.released), int(s.gather_truncated), s.regions, s.soft_depth_m, t.allocations);
     }
     return std::fclose(f) == 0;
 }
