@@ -102,6 +102,11 @@ inline double axis_separation(const ConvexView& poly, const Vec3& n, const Vec3&
 
 }  // namespace
 
+double gap_along_axis(const ConvexView& poly, const Vec3& n, const Vec3& a, const Vec3& b, const Vec3& c) {
+    double sign = 1.0;
+    return axis_separation(poly, n, a, b, c, sign);
+}
+
 SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c) {
     SatResult best;
     best.separation = -1e300;

@@ -68,6 +68,10 @@ struct SatResult {
     int index = 0;  // face index (kind 1), or tri_edge * edge_count + poly_edge (kind 2)
 };
 SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c);
+// The gap between the polytope and triangle (a, b, c) along unit axis n, the larger of its two
+// orientations (< 0: overlap along n). No more than their separation where they overlap (the
+// least overlap over all axes), nor than their distance where they are apart.
+double gap_along_axis(const ConvexView& poly, const Vec3& n, const Vec3& a, const Vec3& b, const Vec3& c);
 
 // Bounds on the distance between a convex polytope (the hull of `count` points) and triangle
 // (a, b, c), by the GJK iteration: lower <= distance <= upper, both 0 when they overlap or touch.

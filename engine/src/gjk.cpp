@@ -152,6 +152,14 @@ GjkSimplex names_of(const Simplex& s) {
     return g;
 }
 
+// The polytope and the triangle touch or overlap (the simplex holds the origin).
+DistanceBounds& touching(DistanceBounds& r, const Simplex& s) {
+    r.lower = r.upper = 0.0;
+    r.direction = Vec3(0.0);
+    r.simplex = names_of(s);
+    return r;
+}
+
 DistanceBounds distance_bounds(const Vec3* poly, int count, const Vec3& a, const Vec3& b, const Vec3& c, double cutoff,
                                double tolerance, int max_iterations, const Vec3* hint, const GjkSimplex* warm) {
     DistanceBounds r;
@@ -184,12 +192,7 @@ DistanceBounds distance_bounds(const Vec3* poly, int count, const Vec3& a, const
         if (ws.n > 0) {
             bool inside = false;
             const Vec3 wv = closest_simplex(ws, inside);
-            if (inside) {
-                r.lower = r.upper = 0.0;
-                r.direction = Vec3(0.0);
-                r.simplex = names_of(ws);
-                return r;
-            }
+            if (inside) return touching(r, ws);
             if (glm::dot(wv, wv) < glm::dot(v, v)) {
                 s = ws;
                 v = wv;
@@ -200,11 +203,7 @@ DistanceBounds distance_bounds(const Vec3* poly, int count, const Vec3& a, const
         r.iterations = it + 1;
         r.simplex = names_of(s);
         const double vv = glm::dot(v, v);
-        if (vv == 0.0) {
-            r.lower = r.upper = 0.0;
-            r.direction = Vec3(0.0);
-            return r;
-        }
+        if (vv == 0.0) return touching(r, s);
         const double vl = std::sqrt(vv);
         const Point w = support_least(poly, count, tri, v);
         // Every point z of D has v.z >= v.w: the gap along v bounds the distance.
@@ -220,12 +219,7 @@ DistanceBounds distance_bounds(const Vec3* poly, int count, const Vec3& a, const
         s.p[s.n++] = w;
         bool inside = false;
         const Vec3 next = closest_simplex(s, inside);
-        if (inside) {
-            r.lower = r.upper = 0.0;
-            r.direction = Vec3(0.0);
-            r.simplex = names_of(s);
-            return r;
-        }
+        if (inside) return touching(r, s);
         // Rounding can stall the descent: the bounds so far stand.
         if (!(glm::dot(next, next) < vv)) return r;
         v = next;

@@ -183,10 +183,10 @@ struct Workspace {
     Vec3 moved_capsule[kMaxToolPieces * (kToolCapsules + 1)];
     NearTri near[kMaxNear];
     int near_count = 0;
-    // Whether `near` holds every triangle within each piece's reach `near_reach` of it at
-    // `near_pose` (the last detect was complete, not narrowed from an earlier one).
+    // Whether `near` holds every triangle within each piece's reach `near_reach` of it at the
+    // pose detect ran at (the pass's base; the last detect was complete, not narrowed from an
+    // earlier one).
     bool near_complete = false;
-    Pose near_pose;
     double near_reach[kMaxToolPieces] = {};
     // A complete near set of an earlier pass of the tick, which a later pass narrows where it
     // covers the pass's box (prior_* as near_* above).
@@ -564,6 +564,17 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                 nt.simplex = simplex;
                 return push(nt);
             };
+            // A triangle whose bounds [lo, hi] from an earlier pose, widened by the motion `m`
+            // since, settle that it is in reach: kept with them, no separation (a bound this old
+            // is too loose for the guard, which measures it itself where it needs it).
+            auto keep_settled = [&](uint32_t tri, double lo, double hi, double m, const Vec3& direction,
+                                    const GjkSimplex& simplex) {
+                NearTri nt{ok, tri, pk, lo - m};
+                nt.upper_m = hi + m;
+                nt.direction = direction;
+                nt.simplex = simplex;
+                return push(nt);
+            };
             if (from_prior) {
                 // The earlier pass's triangles of this piece and object, with their bounds there
                 // widened by the motion since: kept or dropped where that settles it, else
@@ -577,11 +588,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                     const Settled verdict = settle(q.lower_m, q.upper_m, prior_motion, reach, tol);
                     if (verdict == Settled::Out) continue;
                     if (verdict == Settled::In) {
-                        NearTri nt{ok, q.tri, pk, q.lower_m - prior_motion};
-                        nt.upper_m = q.upper_m + prior_motion;
-                        nt.direction = q.direction;
-                        nt.simplex = q.simplex;
-                        if (!push(nt)) break;
+                        if (!keep_settled(q.tri, q.lower_m, q.upper_m, prior_motion, q.direction, q.simplex)) break;
                         continue;
                     }
                     const NearVerdict v =
@@ -602,15 +609,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                         const bool rebase = cache.stamp - e.stamp >= uint64_t(kNearCacheSlots / 2);
                         const Settled verdict = settle(e.lo, e.hi, m, reach, tol);
                         const bool out = verdict == Settled::Out, in = verdict == Settled::In;
-                        if (in) {
-                            // A bound this old is too loose for the guard: it measures the
-                            // separation itself where it needs it.
-                            NearTri nt{ok, e.tri, pk, e.lo - m};
-                            nt.upper_m = e.hi + m;
-                            nt.direction = e.direction;
-                            nt.simplex = e.simplex;
-                            if (!push(nt)) break;
-                        }
+                        if (in && !keep_settled(e.tri, e.lo, e.hi, m, e.direction, e.simplex)) break;
                         if (out || in) {
                             if (rebase) {
                                 e.lo -= m;
@@ -646,7 +645,6 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
         }
     }
     w.near_complete = !any_only && !narrowed;
-    w.near_pose = at;
     return true;
 }
 
@@ -941,14 +939,12 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         }
     }
 
-    // Convex object vertices against tool faces (F-V, Type 11): outside the face of each piece
-    // most in front.
+    // Convex (and mixed) object vertices against tool faces (F-V, Type 11): outside the face of
+    // each piece most in front.
     w.overt_count = radix_sort_unique(w.overts, w.feature_scratch, w.overt_count);
     for (int i = 0; i < w.overt_count; ++i) {
         const ModelObject& obj = model.objects[feature_object(w.overts[i])];
         const uint32_t v = feature_id(w.overts[i]);
-        const Convexity cv = obj.topology.vertex_convexity[v];
-        if (cv != Convexity::Convex && cv != Convexity::Mixed) continue;
         const Vec3& p = obj.mesh.vertices[v];
         {
             const ToolPiece& piece = tool.pieces[feature_piece(w.overts[i])];
@@ -990,7 +986,6 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
     for (int i = 0; i < w.oedge_count; ++i) {
         const ModelObject& obj = model.objects[feature_object(w.oedges[i])];
         const MeshEdge& e = obj.topology.edges[feature_id(w.oedges[i])];
-        if (e.convexity != Convexity::Convex) continue;
         const Vec3& v0 = obj.mesh.vertices[e.v[0]];
         const Vec3& v1 = obj.mesh.vertices[e.v[1]];
         const Vec3 eo = v1 - v0;
@@ -1476,21 +1471,13 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         auto bound_settles = [&](const NearTri& nt, double moved_by, double give) {
             return model.objects[nt.object].compliant && nt.lower_m - moved_by >= -(S.constraint_tol_m + give);
         };
-        // The gap between a piece and a compliant triangle along the triangle's normal: no more
-        // than their separation where they overlap (the least overlap over all axes), nor than
-        // their distance where they are apart, so it stands in for either.
-        auto normal_gap = [&](const NearTri& nt, const Vec3* tool_vertices) {
+        // A compliant triangle's gap along its own normal stands in for the separation
+        // (gap_along_axis) where it is within the give.
+        auto normal_gap = [&](const NearTri& nt, const ConvexView& view) {
             const ModelObject& obj = model.objects[nt.object];
-            const ToolPiece& piece = model.tool.pieces[nt.piece];
-            const Vec3& n = obj.topology.triangle_normals[nt.tri];
-            const double t = glm::dot(n, obj.mesh.vertices[obj.mesh.triangles[nt.tri][0]]);
-            double lo = 1e300, hi = -1e300;
-            for (uint32_t v = piece.vertex_begin; v < piece.vertex_begin + piece.vertex_count; ++v) {
-                const double d = glm::dot(n, tool_vertices[v]);
-                lo = std::min(lo, d);
-                hi = std::max(hi, d);
-            }
-            return std::max(lo - t, t - hi);
+            const auto& t = obj.mesh.triangles[nt.tri];
+            return gap_along_axis(view, obj.topology.triangle_normals[nt.tri], obj.mesh.vertices[t[0]],
+                                  obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]);
         };
         for (int i = 0; i < w.near_count; ++i) {
             NearTri& nt = w.near[i];
@@ -1498,8 +1485,9 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             if (nt.lower_m > moved_by || !std::isnan(nt.separation_m)) continue;
             const double give = triangle_zone_depth(model, w.slacks, nt);
             if (bound_settles(nt, moved_by, give)) continue;
+            const ConvexView view = tool_view(model, nt.piece, w.tool_world, w);
             if (model.objects[nt.object].compliant) {
-                const double gap = normal_gap(nt, w.tool_world);
+                const double gap = normal_gap(nt, view);
                 if (gap - moved_by >= -(S.constraint_tol_m + give)) {
                     nt.separation_m = std::max(gap, nt.lower_m);
                     continue;
@@ -1511,7 +1499,6 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
             // GJK's distance when they are apart (a bound as good as the separation, cheaper);
             // the separating-axis overlap when they touch.
-            const ConvexView view = tool_view(model, nt.piece, w.tool_world, w);
             const Vec3* hint = glm::dot(nt.direction, nt.direction) > 0.0 ? &nt.direction : nullptr;
             const GjkSimplex* warm = nt.simplex.count > 0 ? &nt.simplex : nullptr;
             const double apart = convex_triangle_distance(view, t0, t1, t2, moved_by, 1e-13, 64, hint, warm).lower;
@@ -1534,13 +1521,13 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             if (bound_settles(w.near[i], moved_by, give_i)) continue;
             if (w.near[i].separation_m - moved_by >= -(S.constraint_tol_m + give_i)) continue;
             place_moved();
-            if (model.objects[w.near[i].object].compliant &&
-                normal_gap(w.near[i], w.tool_moved) >= -(S.constraint_tol_m + give_i))
-                continue;
-            ++w.tests;
             const size_t k = w.near[i].piece;
             const ConvexView moved = tool_convex_view(model.tool, k, w.tool_moved, w.moved_face_n, w.moved_face_d,
                                                       &w.moved_face_q, w.moved_capsule);
+            if (model.objects[w.near[i].object].compliant &&
+                normal_gap(w.near[i], moved) >= -(S.constraint_tol_m + give_i))
+                continue;
+            ++w.tests;
             const ModelObject& obj = model.objects[w.near[i].object];
             const auto& t = obj.mesh.triangles[w.near[i].tri];
             const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
@@ -1920,10 +1907,11 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     bool have_prior = false;
     for (int pass = 0; pass < kMaxPasses; ++pass) {
         if (pass > 0 && w.near_complete && model.settings.near_cache) {
-            // The last complete near set: the next pass narrows it where it covers that pass's box.
+            // The last complete near set, detected at the earlier pass's base: the next pass
+            // narrows it where it covers that pass's box.
             std::copy(w.near, w.near + w.near_count, w.prior);
             w.prior_count = w.near_count;
-            w.prior_pose = w.near_pose;
+            w.prior_pose = base;
             std::copy(w.near_reach, w.near_reach + kMaxToolPieces, w.prior_reach);
             have_prior = true;
         }
