@@ -398,7 +398,10 @@ bool advance_superset(const Model& model, NearCache& c, long budget) {
 }
 
 // Makes the completed superset its piece's, each entry with the bounds the old superset had for
-// its triangle where they still hold (else the capsules' bound where it was gathered).
+// its triangle where they still hold: both where the old ones were measured (GJK), else whichever
+// lower bound is higher now, the old superset's or the capsules' bound where the new one was
+// gathered. (A triangle the old superset found far by the capsules' bound or GJK's first gap
+// alone has no upper bound; its lower bound is usually fresher than the build's.)
 void install_superset(const Model& model, NearCache& c) {
     SupersetBuild& b = c.build;
     PieceNearCache& pc = c.piece[b.piece];
@@ -406,14 +409,19 @@ void install_superset(const Model& model, NearCache& c) {
     if (pc.valid) {
         for (int i = 0; i < pc.count; ++i) {
             double m;
-            if (pc.entries[i].hi < 1e300 && near_cache_motion(c, model, pc.entries[i].stamp, b.piece, m))
-                c.previous[kept++] = pc.entries[i];
+            if (near_cache_motion(c, model, pc.entries[i].stamp, b.piece, m)) c.previous[kept++] = pc.entries[i];
         }
     }
     near_cache_index_previous(c, kept);
+    double built_motion = 0.0;
+    const bool built_known = near_cache_motion(c, model, b.stamp, b.piece, built_motion);
     for (int i = 0; i < b.count; ++i) {
         const NearCacheEntry* p = near_cache_find_previous(c, b.entries[i].object, b.entries[i].tri);
-        pc.entries[i] = p ? *p : b.entries[i];
+        double m = 0.0;
+        const bool take_old =
+            p && (p->hi < 1e300 || !built_known ||
+                  (near_cache_motion(c, model, p->stamp, b.piece, m) && p->lo - m > b.entries[i].lo - built_motion));
+        pc.entries[i] = take_old ? *p : b.entries[i];
     }
     pc.count = b.count;
     pc.valid = true;
