@@ -66,6 +66,34 @@ TEST(ToolPieces, ModelKeepsEachConvexPiece) {
     EXPECT_EQ(tool.pieces[0].capsule_count, kToolCapsules);
 }
 
+TEST(ToolPieces, EachPieceListsItsOwnVerticesInOrderAlongItsAxis) {
+    const ModelBuild b = build_model(bent_probe(), {}, RendererSettings{});
+    ASSERT_TRUE(b.model) << b.error;
+    const ModelTool& tool = b.model->tool;
+    ASSERT_EQ(tool.axial_vertices.size(), tool.mesh.vertices.size());
+    ASSERT_EQ(tool.axial_coords.size(), tool.mesh.vertices.size());
+    for (const ToolPiece& p : tool.pieces) {
+        EXPECT_NEAR(glm::length(p.axis), 1.0, 1e-12);
+        // The axis is the capsules' (the tip's runs along y, the shank's along x).
+        const Vec3 chain = p.capsule_points[kToolCapsules] - p.capsule_points[0];
+        EXPECT_NEAR(std::abs(glm::dot(p.axis, chain)), glm::length(chain), 1e-12);
+        std::set<uint32_t> seen;
+        for (uint32_t r = p.vertex_begin; r < p.vertex_begin + p.vertex_count; ++r) {
+            const uint32_t v = tool.axial_vertices[r];
+            EXPECT_GE(v, p.vertex_begin);
+            EXPECT_LT(v, p.vertex_begin + p.vertex_count);
+            seen.insert(v);
+            EXPECT_EQ(tool.axial_coords[r], glm::dot(p.axis, tool.mesh.vertices[v]));
+            if (r > p.vertex_begin) {
+                EXPECT_LE(tool.axial_coords[r - 1], tool.axial_coords[r]);
+            }
+        }
+        EXPECT_EQ(seen.size(), p.vertex_count);  // each of the piece's vertices once
+    }
+    EXPECT_GT(std::abs(tool.pieces[0].axis.y), 0.999);
+    EXPECT_GT(std::abs(tool.pieces[1].axis.x), 0.999);
+}
+
 TEST(ToolPieces, RejectsANonConvexPieceAndTooManyPieces) {
     // An L-shaped single piece: two boxes sharing a face would be one non-convex component.
     const std::vector<Vec2> ell = {{0, 0}, {2e-3, 0}, {2e-3, 1e-3}, {1e-3, 1e-3}, {1e-3, 2e-3}, {0, 2e-3}};

@@ -43,6 +43,7 @@ void set_bounding_capsule(const TriMesh& piece_mesh, ToolPiece& tool) {
         lo = std::min(lo, glm::dot(v - c, axis));
         hi = std::max(hi, glm::dot(v - c, axis));
     }
+    tool.axis = axis;
     constexpr int K = kToolCapsules;
     for (int k = 0; k <= K; ++k) tool.capsule_points[size_t(k)] = c + (lo + (hi - lo) * k / K) * axis;
     // The tool between two cut planes is the hull of its vertices there and of its edges' crossings
@@ -158,6 +159,16 @@ std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
         tool.mesh.triangles.push_back({t[0] + piece.vertex_begin, t[1] + piece.vertex_begin, t[2] + piece.vertex_begin});
     }
     set_bounding_capsule(mesh, piece);
+    {
+        std::vector<uint32_t> order(mesh.vertices.size());
+        for (uint32_t v = 0; v < order.size(); ++v) order[v] = v;
+        auto coord = [&](uint32_t v) { return glm::dot(piece.axis, mesh.vertices[v]); };
+        std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) { return coord(x) < coord(y) || (coord(x) == coord(y) && x < y); });
+        for (uint32_t v : order) {
+            tool.axial_vertices.push_back(piece.vertex_begin + v);
+            tool.axial_coords.push_back(coord(v));
+        }
+    }
     tool.pieces.push_back(piece);
     return "";
 }

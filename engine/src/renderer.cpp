@@ -772,7 +772,13 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
     w.overt_count = 0;
     w.oedge_count = 0;
 
-    // Tool vertices against object features (V-F and its combinations).
+    // Tool vertices against object features (V-F and its combinations). A ball meets a piece's
+    // axis coordinate in an interval no longer than its diameter: only the run of the piece's
+    // vertices sorted along its axis that falls in it (a nanometre over, for the rounding of
+    // placing them) can pass the sphere test below.
+    Vec3 axis_world[kMaxToolPieces];
+    for (size_t k = 0; k < tool.pieces.size(); ++k) axis_world[k] = base.orientation * tool.pieces[k].axis;
+    const double axial_slack = 1e-9 + 1e-12 * (glm::length(base.position) + tool.radius_m);
     for (int i = 0; i < w.near_count; ++i) {
         const NearTri nt = w.near[i];
         const ModelObject& obj = model.objects[nt.object];
@@ -784,7 +790,13 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         // No point further than `far` from the triangle's bounding sphere is within `far` of it.
         const TriangleSphere ts = triangle_sphere(p0, p1, p2);
         const double sphere = ts.radius + far;
-        for (int a = int(piece.vertex_begin); a < int(piece.vertex_begin + piece.vertex_count); ++a) {
+        const double along = glm::dot(axis_world[nt.piece], ts.centre - base.position);
+        const double* coords = tool.axial_coords.data() + piece.vertex_begin;
+        const uint32_t* order = tool.axial_vertices.data() + piece.vertex_begin;
+        const int run_end = int(piece.vertex_count);
+        for (int r = int(std::lower_bound(coords, coords + run_end, along - sphere - axial_slack) - coords);
+             r < run_end && coords[r] <= along + sphere + axial_slack; ++r) {
+            const int a = int(order[r]);
             const double plane = glm::dot(n, w.tool_world[a] - p0);
             if (plane > reach || plane < -back) continue;
             const Vec3 off = w.tool_world[a] - ts.centre;

@@ -132,6 +132,10 @@ struct ToolPiece {
     // The piece's edges (ModelTool::edges from edge_begin) in a hierarchy of boxes, tool frame:
     // finds the few tool edges near an object edge without looking at every one.
     Bvh edge_bvh;
+    // The piece's principal axis (unit, tool frame; the capsules lie along it). Its vertices in
+    // order along it are ModelTool::axial_vertices[vertex_begin, + vertex_count), at
+    // axial_coords (m): a ball around a point holds only the vertices of one run of them.
+    Vec3 axis{0.0, 0.0, 1.0};
 };
 
 // The tool: a rigid union of closed convex pieces (the connected components of its mesh, which
@@ -154,6 +158,10 @@ struct ModelTool {
     // Triangles with indices relative to their piece's first vertex.
     std::vector<std::array<uint32_t, 3>> piece_triangles;
     std::vector<uint8_t> vertex_piece;  // piece of each vertex
+    // Each piece's vertices (indices into mesh.vertices) sorted by their coordinate along the
+    // piece's axis (axial_coords, m, ascending), contiguous per piece as mesh.vertices.
+    std::vector<uint32_t> axial_vertices;
+    std::vector<double> axial_coords;
     std::vector<ToolPiece> pieces;
     double radius_m = 0.0;  // largest distance from the local origin to a vertex
 };
