@@ -91,6 +91,39 @@ TEST(FastSat, AgreesWithTheFullTestOnProbeTips) {
     compare_on(make_probe_tip_collision(ProbeKind::Nabers), 1e-3, 3000, 3);
 }
 
+// The guard takes the gap along one axis (the triangle's normal, the axis a pair's last test
+// found) for the separation where it is enough: it must never exceed the separation, and along
+// the test's own axis it must give the separation back.
+TEST(SeparatingAxis, NoGapAlongAnAxisExceedsTheSeparation) {
+    PlacedTool pt(make_probe_tip_collision(ProbeKind::Williams));
+    ASSERT_TRUE(pt.mb.model) << pt.mb.error;
+    const double scale = 1e-3;
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int overlapping = 0, normal_enough = 0;
+    for (int t = 0; t < 3000; ++t) {
+        pt.place(glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng))), Vec3(u(rng), u(rng), u(rng)) * 0.2 * scale);
+        const ConvexView view = pt.view(true);
+        const Vec3 c = pt.verts[size_t(rng() % pt.verts.size())];
+        const double s = scale * (0.05 + 0.5 * (u(rng) + 1.0));
+        const Vec3 a = c + s * Vec3(u(rng), u(rng), u(rng)), b = c + s * Vec3(u(rng), u(rng), u(rng)),
+                   d = c + s * Vec3(u(rng), u(rng), u(rng));
+        const SatResult sat = separate_convex_triangle(view, a, b, d);
+        overlapping += sat.separation < 0.0;
+        const Vec3 n = glm::normalize(glm::cross(b - a, d - a));
+        const double normal = gap_along_axis(view, n, a, b, d);
+        EXPECT_LE(normal, sat.separation + 1e-12 * scale) << "trial " << t;
+        normal_enough += normal >= sat.separation - 1e-12 * scale;
+        for (int k = 0; k < 8; ++k) {
+            const Vec3 axis = glm::normalize(Vec3(u(rng), u(rng), u(rng)));
+            EXPECT_LE(gap_along_axis(view, axis, a, b, d), sat.separation + 1e-12 * scale) << "trial " << t;
+        }
+        EXPECT_NEAR(gap_along_axis(view, sat.axis, a, b, d), sat.separation, 1e-12 * scale) << "trial " << t;
+    }
+    EXPECT_GT(overlapping, 300);
+    EXPECT_GT(normal_enough, 100);  // the triangle's normal is often the axis itself
+}
+
 }  // namespace
 }  // namespace sulcus
 

@@ -232,6 +232,15 @@ struct Workspace {
     qp::Solution solution;
     qp::WarmStart warm;
     NearCache cache;
+    // The axis the last separating-axis test of a (piece, triangle) pair found, by a hash of the
+    // pair (key 0: none), kept along a session as the near cache is: the guard tries it before
+    // testing the pair again.
+    struct SatMemo {
+        uint64_t key = 0;
+        Vec3 axis{0.0};
+    };
+    static constexpr int kSatMemo = 256;
+    SatMemo sat_memo[kSatMemo];
 };
 
 Workspace& workspace() {
@@ -1371,6 +1380,33 @@ void order_rows(const Model& model, Workspace& w, const ToolPoseAt& at, const do
 }
 
 // solve: one candidate set by sequential linearization (re-linearize until exact).
+// A lower bound on the separation of a piece (`view`) and near triangle nt -- the largest gap
+// between their projections over every axis, negative where they overlap -- that is at least
+// `floor` where the separation is (with `test`; without, a bound that may fall short of it). The
+// gap along any one axis bounds the separation from below, so the triangle's normal and the axis
+// the pair's last separating-axis test found are tried first; only where neither reaches `floor`
+// is the test run (and its axis kept).
+double separation_over(const Model& model, const ConvexView& view, const NearTri& nt, double floor, bool test,
+                       Workspace& w) {
+    const ModelObject& obj = model.objects[nt.object];
+    const auto& t = obj.mesh.triangles[nt.tri];
+    const Vec3 &a = obj.mesh.vertices[t[0]], &b = obj.mesh.vertices[t[1]], &c = obj.mesh.vertices[t[2]];
+    const double normal = gap_along_axis(view, obj.topology.triangle_normals[nt.tri], a, b, c);
+    if (normal >= floor) return normal;
+    const uint64_t key = ((uint64_t(nt.object) << 40) | (uint64_t(nt.tri) << 8) | nt.piece) + 1;
+    Workspace::SatMemo& memo = w.sat_memo[((key * 0x9E3779B97F4A7C15ull) >> 56) % Workspace::kSatMemo];
+    double best = normal;
+    if (memo.key == key) {
+        best = std::max(best, gap_along_axis(view, memo.axis, a, b, c));
+        if (best >= floor) return best;
+    }
+    if (!test) return best;
+    const SatResult sat = separate_convex_triangle(view, a, b, c);
+    memo.key = key;
+    memo.axis = sat.axis;
+    return sat.separation;
+}
+
 CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3& frame, const double target[6],
                                 const double target_local[6], const double lower[6], const double upper[6],
                                 double reach, const Atom* previous, int previous_count, Workspace& w,
@@ -1517,12 +1553,14 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             const ModelObject& obj = model.objects[nt.object];
             const auto& t = obj.mesh.triangles[nt.tri];
             const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
-            // GJK's distance when they are apart (a bound as good as the separation, cheaper);
-            // the separating-axis overlap when they touch.
+            // GJK's distance when they are apart (a bound as good as the separation, cheaper).
+            // Where they touch, a bound on the separation: one that spares the check at the new
+            // pose below, else any (the check there settles it).
             const Vec3* hint = glm::dot(nt.direction, nt.direction) > 0.0 ? &nt.direction : nullptr;
             const GjkSimplex* warm = nt.simplex.count > 0 ? &nt.simplex : nullptr;
             const double apart = convex_triangle_distance(view, t0, t1, t2, moved_by, 1e-13, 64, hint, warm).lower;
-            nt.separation_m = apart > 0.0 ? apart : separate_convex_triangle(view, t0, t1, t2).separation;
+            nt.separation_m =
+                apart > 0.0 ? apart : separation_over(model, view, nt, moved_by - (S.constraint_tol_m + give), false, w);
         }
         // The tool at the new pose, placed once a triangle needs it.
         bool moved_placed = false;
@@ -1558,9 +1596,8 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
                                          glm::dot(dir, dir) > 0.0 ? &dir : nullptr, sx.count > 0 ? &sx : nullptr)
                     .lower > 0.0)
                 continue;
-            const SatResult sat = separate_convex_triangle(moved, t0, t1, t2);
-            const double give = triangle_zone_depth(model, w.slacks, w.near[i]);
-            if (sat.separation < -(S.constraint_tol_m + give)) {
+            const double floor = -(S.constraint_tol_m + give_i);
+            if (separation_over(model, moved, w.near[i], floor, true, w) < floor) {
                 missed_piece[missed] = uint8_t(k);
                 missed_tris[missed++] = w.near[i];
             }
@@ -1892,8 +1929,10 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     // What the cache knows holds for this session at this tick only.
     NearCache& cache = w.cache;
     if (cache.session != state.session || cache.ticks != state.ticks || !same_pose(cache.graphic, state.graphic) ||
-        !same_pose(cache.last_haptic, state.last_haptic))
+        !same_pose(cache.last_haptic, state.last_haptic)) {
         near_cache_reset(cache);
+        for (Workspace::SatMemo& m : w.sat_memo) m.key = 0;
+    }
     // ---- detect ----
     const size_t nv = model.tool.mesh.vertices.size();
     if (nv > static_cast<size_t>(kMaxToolVertices) || model.tool.face_normals.size() > static_cast<size_t>(kMaxToolFaces) ||
