@@ -293,16 +293,37 @@ double capsule_sphere_lower(const Vec3& p0, const Vec3& p1, double r, const Tria
 // the least over its capsules of the bounding-sphere bound, raised where a capsule's axis lies
 // wholly on one side of the triangle's plane to its nearer end's height. `nearest` receives the
 // capsule that gave it.
+//
+// The capsules lie end to end along one line, so capsule j is no nearer to the sphere than the gap
+// along that line between the centre's projection and the capsule's stretch, less the radii. The
+// capsule the centre projects into is measured first; a capsule whose gap alone puts it over that
+// (by a nanometre, for rounding) cannot give the least bound nor tie it, and is not measured.
 double piece_capsule_bound(const ToolPiece& piece, const Vec3* axis, const Vec3& a, const Vec3& b, const Vec3& c,
                            const Vec3& n, int& nearest) {
-    double bound = 1e300;
-    nearest = 0;
     const TriangleSphere ts = triangle_sphere(a, b, c);
-    for (int j = 0; j < piece.capsule_count; ++j) {
+    const int count = piece.capsule_count;
+    auto capsule = [&](int j) {
         const double r = piece.capsule_radii_m[size_t(j)];
         double bj = capsule_sphere_lower(axis[j], axis[j + 1], r, ts);
         const double h0 = glm::dot(n, axis[j] - a), h1 = glm::dot(n, axis[j + 1] - a);
         if (h0 * h1 > 0.0) bj = std::max(bj, std::min(std::abs(h0), std::abs(h1)) - r);
+        return bj;
+    };
+    const Vec3 chain = axis[count] - axis[0];
+    const double length = glm::length(chain);
+    const double along = length > 0.0 ? glm::dot(ts.centre - axis[0], chain) / length : 0.0;
+    const double stretch = length / count;
+    auto gap_bound = [&](int j) {
+        const double gap = std::max({0.0, j * stretch - along, along - (j + 1) * stretch});
+        return gap - ts.radius - piece.capsule_radii_m[size_t(j)];
+    };
+    const int first = stretch > 0.0 ? std::clamp(int(std::floor(along / stretch)), 0, count - 1) : 0;
+    const double first_bound = capsule(first);
+    double bound = 1e300;
+    nearest = 0;
+    for (int j = 0; j < count; ++j) {
+        if (j != first && gap_bound(j) >= first_bound + 1e-9) continue;
+        const double bj = j == first ? first_bound : capsule(j);
         if (bj < bound) {
             bound = bj;
             nearest = j;
