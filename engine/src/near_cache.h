@@ -36,6 +36,7 @@ struct NearCacheEntry {
     uint32_t tri = 0;
     uint16_t object = 0;
     uint64_t stamp = 0;  // the pose the bounds hold at
+    double path_m = 0.0;  // the piece's path (NearCache::path_m) at that pose
     double lo = 0.0;     // bounds on the triangle's distance from the piece there (m)
     double hi = 1e300;
     Vec3 direction{0.0};  // GJK's last direction there (world; zero if none): the next search's start
@@ -48,6 +49,10 @@ struct PieceNearCache {
     double radius_m = 0.0;  // every triangle within this of the piece there is in it
     int count = 0;          // entries, grouped by object in object order
     NearCacheEntry entries[kNearCacheEntries];
+    // Per entry, a lower bound on its triangle's distance from the piece at the pose of path
+    // length `due - bound`: while the path since adds less than `due` less the reach and the
+    // tolerance, the triangle stays out of reach and the entry is not looked at.
+    double due[kNearCacheEntries];
 };
 
 // A piece's next superset, gathered a slice per tick while the current one still holds, so that
@@ -58,6 +63,7 @@ struct SupersetBuild {
     size_t piece = 0;
     Pose pose;
     uint64_t stamp = 0;
+    double path_m = 0.0;  // the piece's path there
     double radius_m = 0.0;
     Vec3 axis[kToolCapsules + 1];  // the piece's capsule chain at `pose`
     size_t object = 0;             // the object being walked
@@ -81,6 +87,12 @@ struct NearCache {
     // current one (m), worked out once per current pose.
     double motion_m[kNearCacheSlots][kMaxToolPieces] = {};
     uint64_t motion_for[kNearCacheSlots][kMaxToolPieces] = {};
+    // Each piece's path: the sum of its motion bounds from pose to pose, stamp by stamp. No point
+    // of the piece moved further between two poses than the path between them (the motion bound
+    // between two poses is no more than the sum over the poses between), so an entry older than
+    // the ring still has a bound, and entries far out of reach need no look until the path has
+    // grown by their distance.
+    double path_m[kMaxToolPieces] = {};
     PieceNearCache piece[kMaxToolPieces];
     NearCacheEntry previous[kNearCacheEntries];  // a superset being replaced
     int32_t table[kNearCacheHash];               // (object, triangle) -> index in `previous`
@@ -140,17 +152,20 @@ inline void near_cache_reset(NearCache& c) {
     c.stamp += kNearCacheSlots;
 }
 
-// Makes `pose` the current one (a new stamp unless it is the last one); forgets everything
-// when the model is not the one the cache was filled for.
+// Makes `pose` the current one (a new stamp unless it is the last one), the pieces' paths grown
+// by their motion from the last one; forgets everything when the model is not the one the cache
+// was filled for.
 inline void near_cache_begin(NearCache& c, const Model& model, const Pose& pose) {
     if (c.model_serial != model.serial) {
         c.model_serial = model.serial;
         near_cache_reset(c);
     }
     const int last = int(c.stamp % kNearCacheSlots);
-    if (c.stamp > 0 && c.ring_stamp[last] == c.stamp && c.ring[last].position == pose.position &&
-        c.ring[last].orientation == pose.orientation)
-        return;
+    const bool follows = c.stamp > 0 && c.ring_stamp[last] == c.stamp;
+    if (follows && c.ring[last].position == pose.position && c.ring[last].orientation == pose.orientation) return;
+    if (follows)
+        for (size_t k = 0; k < model.tool.pieces.size() && k < size_t(kMaxToolPieces); ++k)
+            c.path_m[k] += motion_bound(model.tool.pieces[k], c.ring[last], pose);
     ++c.stamp;
     const int slot = int(c.stamp % kNearCacheSlots);
     c.ring[slot] = pose;
@@ -159,6 +174,11 @@ inline void near_cache_begin(NearCache& c, const Model& model, const Pose& pose)
 
 // How far no point of piece k (of `model`) moved from the pose of `stamp` to the current one;
 // false when that pose is no longer kept.
+// How far no point of piece k moved since an entry's pose: as near_cache_motion while that pose is
+// kept, else by the path since (with room for its rounding); false for an entry of no pose.
+inline bool near_cache_entry_motion(NearCache& c, const Model& model, const NearCacheEntry& e, size_t k,
+                                    double& motion);
+
 inline bool near_cache_motion(NearCache& c, const Model& model, uint64_t stamp, size_t k, double& motion) {
     if (stamp == 0 || stamp > c.stamp || c.stamp - stamp >= uint64_t(kNearCacheSlots)) return false;
     const int slot = int(stamp % kNearCacheSlots);
@@ -168,6 +188,14 @@ inline bool near_cache_motion(NearCache& c, const Model& model, uint64_t stamp, 
         c.motion_for[slot][k] = c.stamp;
     }
     motion = c.motion_m[slot][k];
+    return true;
+}
+
+inline bool near_cache_entry_motion(NearCache& c, const Model& model, const NearCacheEntry& e, size_t k,
+                                    double& motion) {
+    if (near_cache_motion(c, model, e.stamp, k, motion)) return true;
+    if (e.stamp == 0 || e.stamp > c.stamp) return false;
+    motion = (c.path_m[k] - e.path_m) * (1.0 + 1e-12) + 1e-15 * (1.0 + c.path_m[k]);
     return true;
 }
 

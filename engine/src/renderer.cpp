@@ -379,6 +379,7 @@ void start_superset(NearCache& c, size_t k, const Pose& at, const Vec3* axis, do
     b.piece = k;
     b.pose = at;
     b.stamp = c.stamp;
+    b.path_m = c.path_m[k];
     b.radius_m = radius;
     for (int j = 0; j <= kToolCapsules; ++j) b.axis[j] = axis[j];
     b.object = 0;
@@ -415,6 +416,7 @@ bool advance_superset(const Model& model, NearCache& c, long budget) {
             e.tri = tri;
             e.object = ok;
             e.stamp = b.stamp;
+            e.path_m = b.path_m;
             e.lo = bound;
             return true;
         });
@@ -452,6 +454,7 @@ void install_superset(const Model& model, NearCache& c) {
             p && (p->hi < 1e300 || !built_known ||
                   (near_cache_motion(c, model, p->stamp, b.piece, m) && p->lo - m > b.entries[i].lo - built_motion));
         pc.entries[i] = take_old ? *p : b.entries[i];
+        pc.due[i] = -1e300;  // looked at on the next tick
     }
     pc.count = b.count;
     pc.valid = true;
@@ -637,22 +640,29 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                              v.simplex.count > 0 ? v.simplex : q.simplex);
                 }
             } else if (pc) {
+                const double path = cache.path_m[k];
+                // With room for the rounding of the sums along the path.
+                const double skip_over = reach + tol + 1e-15 * (1.0 + path);
                 for (; cursor < pc->count && pc->entries[cursor].object == ok && !overflow; ++cursor) {
+                    // Out of reach while the path has not grown by its distance bound since.
+                    if (pc->due[cursor] - path > skip_over) continue;
                     NearCacheEntry& e = pc->entries[cursor];
                     double m;
-                    if (near_cache_motion(cache, model, e.stamp, k, m)) {
+                    if (near_cache_entry_motion(cache, model, e, k, m)) {
                         // Before its pose leaves the ring, a settled entry's bounds move to the
-                        // current pose (widened by the motion since), rather than being measured
-                        // again once forgotten.
+                        // current pose (widened by the motion since), rather than being bounded
+                        // by the looser path once forgotten.
                         const bool rebase = cache.stamp - e.stamp >= uint64_t(kNearCacheSlots / 2);
                         const Settled verdict = settle(e.lo, e.hi, m, reach, tol);
                         const bool out = verdict == Settled::Out, in = verdict == Settled::In;
                         if (in && !keep_settled(e.tri, e.lo, e.hi, m, e.direction, e.simplex)) break;
                         if (out || in) {
+                            pc->due[cursor] = (e.lo - m) + path;
                             if (rebase) {
                                 e.lo -= m;
                                 if (e.hi < 1e300) e.hi += m;
                                 e.stamp = cache.stamp;
+                                e.path_m = path;
                             }
                             continue;
                         }
@@ -665,6 +675,8 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                     if (glm::dot(v.direction, v.direction) > 0.0) e.direction = v.direction;
                     if (v.simplex.count > 0) e.simplex = v.simplex;
                     e.stamp = cache.stamp;
+                    e.path_m = path;
+                    pc->due[cursor] = v.lo + path;
                     if (v.keep) keep(e.tri, v.lo, v.hi, e.direction, e.simplex);
                 }
             } else {
