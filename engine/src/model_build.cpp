@@ -163,7 +163,7 @@ std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
         std::vector<uint32_t> order(mesh.vertices.size());
         for (uint32_t v = 0; v < order.size(); ++v) order[v] = v;
         auto coord = [&](uint32_t v) { return glm::dot(piece.axis, mesh.vertices[v]); };
-        std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) { return coord(x) < coord(y) || (coord(x) == coord(y) && x < y); });
+        std::stable_sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) { return coord(x) < coord(y); });
         for (uint32_t v : order) {
             tool.axial_vertices.push_back(piece.vertex_begin + v);
             tool.axial_coords.push_back(coord(v));

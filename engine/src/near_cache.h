@@ -23,8 +23,8 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <limits>
 #include <algorithm>
+#include <limits>
 
 namespace sulcus {
 
@@ -49,9 +49,10 @@ struct PieceNearCache {
     double radius_m = 0.0;  // every triangle within this of the piece there is in it
     int count = 0;          // entries, grouped by object in object order
     NearCacheEntry entries[kNearCacheEntries];
-    // Per entry, a lower bound on its triangle's distance from the piece at the pose of path
-    // length `due - bound`: while the path since adds less than `due` less the reach and the
-    // tolerance, the triangle stays out of reach and the entry is not looked at.
+    // Per entry, when it needs a look again: the lower bound on its triangle's distance from the
+    // piece when it was last looked at, plus the piece's path then. `due` less the path now bounds
+    // the distance now from below; while that exceeds the reach (and the tolerance), the triangle
+    // stays out of reach and the entry is skipped.
     double due[kNearCacheEntries];
 };
 
@@ -174,11 +175,6 @@ inline void near_cache_begin(NearCache& c, const Model& model, const Pose& pose)
 
 // How far no point of piece k (of `model`) moved from the pose of `stamp` to the current one;
 // false when that pose is no longer kept.
-// How far no point of piece k moved since an entry's pose: as near_cache_motion while that pose is
-// kept, else by the path since (with room for its rounding); false for an entry of no pose.
-inline bool near_cache_entry_motion(NearCache& c, const Model& model, const NearCacheEntry& e, size_t k,
-                                    double& motion);
-
 inline bool near_cache_motion(NearCache& c, const Model& model, uint64_t stamp, size_t k, double& motion) {
     if (stamp == 0 || stamp > c.stamp || c.stamp - stamp >= uint64_t(kNearCacheSlots)) return false;
     const int slot = int(stamp % kNearCacheSlots);
@@ -191,6 +187,8 @@ inline bool near_cache_motion(NearCache& c, const Model& model, uint64_t stamp, 
     return true;
 }
 
+// How far no point of piece k moved since an entry's pose: as near_cache_motion while that pose is
+// kept, else by the path since (with room for its rounding); false for an entry of no pose.
 inline bool near_cache_entry_motion(NearCache& c, const Model& model, const NearCacheEntry& e, size_t k,
                                     double& motion) {
     if (near_cache_motion(c, model, e.stamp, k, motion)) return true;

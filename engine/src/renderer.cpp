@@ -1412,33 +1412,45 @@ void order_rows(const Model& model, Workspace& w, const ToolPoseAt& at, const do
             }
 }
 
-// solve: one candidate set by sequential linearization (re-linearize until exact).
-// A lower bound on the separation of a piece (`view`) and near triangle nt -- the largest gap
-// between their projections over every axis, negative where they overlap -- that is at least
-// `floor` where the separation is (with `test`; without, a bound that may fall short of it). The
-// gap along any one axis bounds the separation from below, so the triangle's normal and the axis
-// the pair's last separating-axis test found are tried first; only where neither reaches `floor`
-// is the test run (and its axis kept).
-double separation_over(const Model& model, const ConvexView& view, const NearTri& nt, double floor, bool test,
-                       Workspace& w) {
+// The separation of a piece (`view`) and near triangle nt is the largest gap between their
+// projections over every axis (negative where they overlap), so the gap along any one axis bounds
+// it from below. The guard tries two such witnesses before the separating-axis test: the
+// triangle's normal and the axis the pair's last test found (kept by a hash of the pair).
+uint64_t sat_memo_key(const NearTri& nt) {
+    return ((uint64_t(nt.object) << 40) | (uint64_t(nt.tri) << 8) | nt.piece) + 1;
+}
+Workspace::SatMemo& sat_memo_slot(uint64_t key, Workspace& w) {
+    return w.sat_memo[((key * 0x9E3779B97F4A7C15ull) >> 56) % Workspace::kSatMemo];
+}
+
+// The larger of the two witnesses' gaps, the second only where the first falls short of `floor`.
+double separation_witness(const Model& model, const ConvexView& view, const NearTri& nt, double floor,
+                          Workspace& w) {
     const ModelObject& obj = model.objects[nt.object];
     const auto& t = obj.mesh.triangles[nt.tri];
     const Vec3 &a = obj.mesh.vertices[t[0]], &b = obj.mesh.vertices[t[1]], &c = obj.mesh.vertices[t[2]];
     const double normal = gap_along_axis(view, obj.topology.triangle_normals[nt.tri], a, b, c);
     if (normal >= floor) return normal;
-    const uint64_t key = ((uint64_t(nt.object) << 40) | (uint64_t(nt.tri) << 8) | nt.piece) + 1;
-    Workspace::SatMemo& memo = w.sat_memo[((key * 0x9E3779B97F4A7C15ull) >> 56) % Workspace::kSatMemo];
-    double best = normal;
-    if (memo.key == key) {
-        best = std::max(best, gap_along_axis(view, memo.axis, a, b, c));
-        if (best >= floor) return best;
-    }
-    if (!test) return best;
-    const SatResult sat = separate_convex_triangle(view, a, b, c);
+    const uint64_t key = sat_memo_key(nt);
+    const Workspace::SatMemo& memo = sat_memo_slot(key, w);
+    if (memo.key != key) return normal;
+    return std::max(normal, gap_along_axis(view, memo.axis, a, b, c));
+}
+
+// The separation by the separating-axis test, its axis kept for the pair's next witness.
+double separation_test(const Model& model, const ConvexView& view, const NearTri& nt, Workspace& w) {
+    const ModelObject& obj = model.objects[nt.object];
+    const auto& t = obj.mesh.triangles[nt.tri];
+    const SatResult sat =
+        separate_convex_triangle(view, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]);
+    const uint64_t key = sat_memo_key(nt);
+    Workspace::SatMemo& memo = sat_memo_slot(key, w);
     memo.key = key;
     memo.axis = sat.axis;
     return sat.separation;
 }
+
+// solve: one candidate set by sequential linearization (re-linearize until exact).
 
 CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3& frame, const double target[6],
                                 const double target_local[6], const double lower[6], const double upper[6],
@@ -1560,14 +1572,10 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         auto bound_settles = [&](const NearTri& nt, double moved_by, double give) {
             return model.objects[nt.object].compliant && nt.lower_m - moved_by >= -(S.constraint_tol_m + give);
         };
-        // A compliant triangle's gap along its own normal stands in for the separation
-        // (gap_along_axis) where it is within the give.
-        auto normal_gap = [&](const NearTri& nt, const ConvexView& view) {
-            const ModelObject& obj = model.objects[nt.object];
-            const auto& t = obj.mesh.triangles[nt.tri];
-            return gap_along_axis(view, obj.topology.triangle_normals[nt.tri], obj.mesh.vertices[t[0]],
-                                  obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]);
-        };
+        // A separation of at least `floor` at the start spares a triangle the check at the new
+        // pose. A compliant triangle (which the tool is often inside) tries the witnesses
+        // (separation_witness) before GJK; a rigid one only where GJK finds them touching. Either
+        // way a bound that falls short is kept: the check at the new pose settles the triangle.
         for (int i = 0; i < w.near_count; ++i) {
             NearTri& nt = w.near[i];
             const double moved_by = shift + turn * model.tool.pieces[nt.piece].radius_m;
@@ -1575,25 +1583,23 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             const double give = triangle_zone_depth(model, w.slacks, nt);
             if (bound_settles(nt, moved_by, give)) continue;
             const ConvexView view = tool_view(model, nt.piece, w.tool_world, w);
-            if (model.objects[nt.object].compliant) {
-                const double gap = normal_gap(nt, view);
-                if (gap - moved_by >= -(S.constraint_tol_m + give)) {
-                    nt.separation_m = std::max(gap, nt.lower_m);
-                    continue;
-                }
+            const double floor = moved_by - (S.constraint_tol_m + give);
+            const bool compliant = model.objects[nt.object].compliant;
+            const double witness = compliant ? separation_witness(model, view, nt, floor, w) : -1e300;
+            if (witness >= floor) {
+                nt.separation_m = std::max(witness, nt.lower_m);
+                continue;
             }
             ++w.tests;
             const ModelObject& obj = model.objects[nt.object];
             const auto& t = obj.mesh.triangles[nt.tri];
             const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
-            // GJK's distance when they are apart (a bound as good as the separation, cheaper).
-            // Where they touch, a bound on the separation: one that spares the check at the new
-            // pose below, else any (the check there settles it).
+            // GJK's distance when they are apart (a bound as good as the separation, cheaper);
+            // the witnesses' bound where they touch.
             const Vec3* hint = glm::dot(nt.direction, nt.direction) > 0.0 ? &nt.direction : nullptr;
             const GjkSimplex* warm = nt.simplex.count > 0 ? &nt.simplex : nullptr;
             const double apart = convex_triangle_distance(view, t0, t1, t2, moved_by, 1e-13, 64, hint, warm).lower;
-            nt.separation_m =
-                apart > 0.0 ? apart : separation_over(model, view, nt, moved_by - (S.constraint_tol_m + give), false, w);
+            nt.separation_m = apart > 0.0 ? apart : compliant ? witness : separation_witness(model, view, nt, floor, w);
         }
         // The tool at the new pose, placed once a triangle needs it.
         bool moved_placed = false;
@@ -1615,9 +1621,11 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             const size_t k = w.near[i].piece;
             const ConvexView moved = tool_convex_view(model.tool, k, w.tool_moved, w.moved_face_n, w.moved_face_d,
                                                       &w.moved_face_q, w.moved_capsule);
-            if (model.objects[w.near[i].object].compliant &&
-                normal_gap(w.near[i], moved) >= -(S.constraint_tol_m + give_i))
-                continue;
+            // As at the start: a compliant triangle's witnesses before GJK, a rigid one's after.
+            const double floor = -(S.constraint_tol_m + give_i);
+            const bool compliant = model.objects[w.near[i].object].compliant;
+            const double witness = compliant ? separation_witness(model, moved, w.near[i], floor, w) : -1e300;
+            if (witness >= floor) continue;
             ++w.tests;
             const ModelObject& obj = model.objects[w.near[i].object];
             const auto& t = obj.mesh.triangles[w.near[i].tri];
@@ -1629,8 +1637,8 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
                                          glm::dot(dir, dir) > 0.0 ? &dir : nullptr, sx.count > 0 ? &sx : nullptr)
                     .lower > 0.0)
                 continue;
-            const double floor = -(S.constraint_tol_m + give_i);
-            if (separation_over(model, moved, w.near[i], floor, true, w) < floor) {
+            if ((compliant ? witness : separation_witness(model, moved, w.near[i], floor, w)) < floor &&
+                separation_test(model, moved, w.near[i], w) < floor) {
                 missed_piece[missed] = uint8_t(k);
                 missed_tris[missed++] = w.near[i];
             }
