@@ -174,6 +174,7 @@ struct Workspace {
     uint32_t edge_hits[kMaxToolEdges];  // tool edges near one object edge
     Vec3 face_n[kMaxToolFaces];
     double face_d[kMaxToolFaces];
+    double face_s[kMaxToolFaces];  // gather: an object vertex's height over each face of a piece (m)
     Quat face_q{1.0, 0.0, 0.0, 0.0};  // the rotation face_n was placed with
     Vec3 capsule[kMaxToolPieces * (kToolCapsules + 1)];  // the pieces' bounding capsules at that pose
     // The same at the pose a solve moves the tool to (the guard's check there).
@@ -1002,24 +1003,33 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
     }
 
     // Convex (and mixed) object vertices against tool faces (F-V, Type 11): outside the face of
-    // each piece most in front.
+    // each piece most in front. One face that has the vertex beyond the reach puts the most in
+    // front beyond it too: the face that did so for the piece's last vertex is tried first (its
+    // neighbours on the object are near it), and the search stops at the first such face.
     w.overt_count = radix_sort_unique(w.overts, w.feature_scratch, w.overt_count);
+    int beyond[kMaxToolPieces];
+    for (int& f : beyond) f = -1;
     for (int i = 0; i < w.overt_count; ++i) {
         const ModelObject& obj = model.objects[feature_object(w.overts[i])];
         const uint32_t v = feature_id(w.overts[i]);
         const Vec3& p = obj.mesh.vertices[v];
         {
-            const ToolPiece& piece = tool.pieces[feature_piece(w.overts[i])];
+            const int k = feature_piece(w.overts[i]);
+            const ToolPiece& piece = tool.pieces[k];
             const int f0 = int(piece.face_begin), f1 = int(piece.face_begin + piece.face_count);
+            if (beyond[k] >= 0 && glm::dot(w.face_n[beyond[k]], p) - w.face_d[beyond[k]] > reach) continue;
             int best = -1;
             double best_s = -1e300;
             for (int f = f0; f < f1; ++f) {
                 const double s = glm::dot(w.face_n[f], p) - w.face_d[f];
+                w.face_s[f] = s;
                 if (s > best_s) {
                     best_s = s;
                     best = f;
+                    if (s > reach) break;
                 }
             }
+            if (best_s > reach) beyond[k] = best;
             if (best < 0 || best_s > reach || best_s < -back_of(feature_object(w.overts[i]))) continue;
             // Inside a compliant object: only a vertex pressing the way the object pushes back
             // (the tool face's normal against the push) holds the tool.
@@ -1033,8 +1043,7 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             add_atom(w, at);
             for (int f = f0; f < f1; ++f) {
                 if (f == best) continue;
-                const double s = glm::dot(w.face_n[f], p) - w.face_d[f];
-                if (s >= best_s - model.settings.tie_tol_m) {
+                if (w.face_s[f] >= best_s - model.settings.tie_tol_m) {
                     Atom alt = at;
                     alt.tool_face = static_cast<uint32_t>(f);
                     add_alt(w, index, alt);
