@@ -1,5 +1,6 @@
-// The step's allocation-free key sort: the same order and the same distinct keys as std::sort and
-// std::unique, whichever bytes of the keys vary.
+// The step's allocation-free key sorts: the same order and the same distinct keys as std::sort and
+// std::unique, whichever bytes of the keys vary, and (sort_unique) whatever earlier calls left in
+// its table.
 #include "radix_sort.h"
 
 #include <gtest/gtest.h>
@@ -12,6 +13,11 @@ using namespace sulcus;
 
 namespace {
 
+DedupeTable& shared_table() {
+    static DedupeTable table;
+    return table;
+}
+
 void expect_sorted_like_std(std::vector<uint64_t> keys) {
     std::vector<uint64_t> scratch(keys.size()), work = keys;
     std::vector<uint64_t> expected = keys;
@@ -23,6 +29,11 @@ void expect_sorted_like_std(std::vector<uint64_t> keys) {
     const int n = radix_sort_unique(work.data(), scratch.data(), int(work.size()));
     expected.erase(std::unique(expected.begin(), expected.end()), expected.end());
     ASSERT_EQ(size_t(n), expected.size());
+    EXPECT_TRUE(std::equal(expected.begin(), expected.end(), work.begin()));
+
+    work = keys;
+    const int m = sort_unique(work.data(), scratch.data(), int(work.size()), shared_table());
+    ASSERT_EQ(size_t(m), expected.size());
     EXPECT_TRUE(std::equal(expected.begin(), expected.end(), work.begin()));
 }
 
@@ -53,4 +64,22 @@ TEST(RadixSort, EmptyOneAndAllEqual) {
     expect_sorted_like_std({42});
     expect_sorted_like_std(std::vector<uint64_t>(100, 7));
     expect_sorted_like_std({3, 1, 2, 3, 1});
+}
+
+TEST(RadixSort, DedupeTableSurvivesItsStampWrappingRound) {
+    // Slots filled at stamp 1, then the stamp runs round to 1 again: the table must not take
+    // the old slots for keys of the new call.
+    std::mt19937_64 rng(9);
+    std::vector<uint64_t> first(300), other(300);
+    for (uint64_t& k : first) k = (rng() % 2) << 40 | (rng() % 300) << 8 | (rng() % 3);
+    for (uint64_t& k : other) k = (rng() % 2) << 40 | (rng() % 300) << 8 | (rng() % 3);
+    DedupeTable& table = shared_table();
+    table.now = 0;
+    expect_sorted_like_std(first);
+    EXPECT_EQ(table.now, 1u);
+    table.now = ~uint32_t(0) - 1;
+    expect_sorted_like_std(other);
+    EXPECT_EQ(table.now, ~uint32_t(0));
+    expect_sorted_like_std(first);
+    EXPECT_EQ(table.now, 1u);
 }

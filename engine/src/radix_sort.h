@@ -2,6 +2,7 @@
 // a byte per pass, skipping the bytes every key shares (the high bytes of small indices).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <utility>
@@ -37,6 +38,57 @@ inline int radix_sort_unique(uint64_t* keys, uint64_t* scratch, int count) {
     int n = 0;
     for (int i = 0; i < count; ++i)
         if (n == 0 || sorted[i] != keys[n - 1]) keys[n++] = sorted[i];
+    return n;
+}
+
+// Slots of an open-addressing table that drops repeats before a sort. Each slot carries the
+// stamp of the call that filled it, so a call never clears the table; a call uses only the
+// first 2^k slots, k just enough for half of them to stay empty, so that a few hundred keys touch
+// a few kilobytes.
+struct DedupeTable {
+    static constexpr int kBits = 12;
+    static constexpr int kSlots = 1 << kBits;
+    uint64_t key[kSlots];
+    uint32_t stamp[kSlots] = {};
+    uint32_t now = 0;
+};
+
+// Sorts and drops repeats, as radix_sort_unique does, for inputs that repeat most keys (the
+// features of neighbouring triangles): the repeats go first, by the table, then the distinct
+// keys are sorted. Inputs too large for the table are radix-sorted whole.
+inline int sort_unique(uint64_t* keys, uint64_t* scratch, int count, DedupeTable& table) {
+    if (count > DedupeTable::kSlots / 2) return radix_sort_unique(keys, scratch, count);
+    if (count < 2) return count;
+    if (++table.now == 0) {
+        std::fill(table.stamp, table.stamp + DedupeTable::kSlots, 0u);
+        table.now = 1;
+    }
+    int bits = 4;
+    while ((1 << bits) < 2 * count) ++bits;
+    const uint32_t mask = (1u << bits) - 1u;
+    int n = 0;
+    for (int i = 0; i < count; ++i) {
+        const uint64_t k = keys[i];
+        uint32_t h = uint32_t((k * 0x9E3779B97F4A7C15ull) >> (64 - bits));
+        bool seen = false;
+        while (table.stamp[h] == table.now) {
+            if (table.key[h] == k) {
+                seen = true;
+                break;
+            }
+            h = (h + 1u) & mask;
+        }
+        if (seen) continue;
+        table.stamp[h] = table.now;
+        table.key[h] = k;
+        keys[n++] = k;
+    }
+    if (n > 256) {
+        const uint64_t* sorted = radix_sort(keys, scratch, n);
+        if (sorted != keys) std::memcpy(keys, sorted, sizeof(uint64_t) * size_t(n));
+    } else {
+        std::sort(keys, keys + n);
+    }
     return n;
 }
 

@@ -205,6 +205,7 @@ struct Workspace {
     int overt_count = 0;
     ObjFeature oedges[kMaxObjFeatures];
     ObjFeature feature_scratch[kMaxObjFeatures];
+    DedupeTable feature_table;
     int oedge_count = 0;
     Atom atoms[kMaxAtoms];
     int atom_count = 0;
@@ -1006,7 +1007,7 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
     // each piece most in front. One face that has the vertex beyond the reach puts the most in
     // front beyond it too: the face that did so for the piece's last vertex is tried first (its
     // neighbours on the object are near it), and the search stops at the first such face.
-    w.overt_count = radix_sort_unique(w.overts, w.feature_scratch, w.overt_count);
+    w.overt_count = sort_unique(w.overts, w.feature_scratch, w.overt_count, w.feature_table);
     int beyond[kMaxToolPieces];
     for (int& f : beyond) f = -1;
     for (int i = 0; i < w.overt_count; ++i) {
@@ -1053,7 +1054,7 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
     }
 
     // Tool edges against convex object edges (E-E, Type 2) on the dynamic plane of eq. 7.
-    w.oedge_count = radix_sort_unique(w.oedges, w.feature_scratch, w.oedge_count);
+    w.oedge_count = sort_unique(w.oedges, w.feature_scratch, w.oedge_count, w.feature_table);
     for (int i = 0; i < w.oedge_count; ++i) {
         const ModelObject& obj = model.objects[feature_object(w.oedges[i])];
         const MeshEdge& e = obj.topology.edges[feature_id(w.oedges[i])];
