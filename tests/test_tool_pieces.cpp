@@ -2,10 +2,14 @@
 // the step takes candidates and constraints from every piece.
 #include "scene_helpers.h"
 
+#include "geometry.h"
+#include "tool_placement.h"
+#include "sulcus/content/probes.h"
 #include "sulcus/engine/exact_check.h"
 
 #include <gtest/gtest.h>
 
+#include <random>
 #include <set>
 
 namespace sulcus {
@@ -92,6 +96,133 @@ TEST(ToolPieces, EachPieceListsItsOwnVerticesInOrderAlongItsAxis) {
     }
     EXPECT_GT(std::abs(tool.pieces[0].axis.y), 0.999);
     EXPECT_GT(std::abs(tool.pieces[1].axis.x), 0.999);
+}
+
+// A piece certified for it finds the vertex least along a direction by descending along its
+// corners: the same value as looking at every vertex, from any start, for any direction; GJK's
+// bounds with the descent are those without it, to the tolerance asked. Certified: a vertex
+// inside a flat face (the descent starts at a corner); not certified: a vertex on a straight
+// edge.
+TEST(ToolPieces, DescentAlongEdgesFindsTheLeastVertexOfACertifiedPiece) {
+    std::vector<TriMesh> tools = {bent_probe()};
+    for (ProbeKind kind : kAllProbeKinds) tools.push_back(make_probe_collision(kind));
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int certified = 0;
+    for (const TriMesh& mesh : tools) {
+        const ModelBuild b = build_model(mesh, {}, RendererSettings{});
+        ASSERT_TRUE(b.model) << b.error;
+        const ModelTool& tool = b.model->tool;
+        ASSERT_EQ(tool.neighbour_offsets.size(), tool.mesh.vertices.size() + 1);
+        for (size_t k = 0; k < tool.pieces.size(); ++k) {
+            const ToolPiece& p = tool.pieces[k];
+            if (!p.descend) continue;
+            ++certified;
+            const Vec3* vs = tool.mesh.vertices.data() + p.vertex_begin;
+            const int n = int(p.vertex_count);
+            const uint32_t* offsets = tool.neighbour_offsets.data() + p.vertex_begin;
+            for (int trial = 0; trial < 3000; ++trial) {
+                Vec3 d(u(rng), u(rng), u(rng));
+                if (trial % 3 == 0) d = Vec3(double(trial % 2), double(trial / 3 % 2), 0.0);  // axis-aligned ties
+                if (!(glm::dot(d, d) > 0.0)) d = Vec3(0.0, 0.0, 1.0);
+                const int start = int(rng() % uint64_t(n));
+                const int scan = least_along(vs, n, nullptr, nullptr, nullptr, d, 0);
+                const int descent = least_along(vs, n, offsets, tool.neighbours.data(),
+                                                tool.descent_start.data() + p.vertex_begin, d, start);
+                ASSERT_EQ(glm::dot(d, vs[descent]), glm::dot(d, vs[scan])) << "piece " << k << " trial " << trial;
+            }
+            // GJK on triangles around the piece: the same bounds with the descent as without it.
+            std::vector<Vec3> world(tool.mesh.vertices.begin(), tool.mesh.vertices.end());
+            std::vector<Vec3> normals(tool.face_normals.begin(), tool.face_normals.end());
+            const Quat q{1.0, 0.0, 0.0, 0.0};
+            const ConvexView with = tool_convex_view(tool, k, world.data(), normals.data(), tool.face_offsets.data(), &q);
+            ASSERT_NE(with.neighbours, nullptr);
+            ConvexView without = with;
+            without.neighbours = nullptr;
+            without.neighbour_offsets = nullptr;
+            const Vec3 centre = p.centre;
+            for (int trial = 0; trial < 500; ++trial) {
+                const Vec3 at = centre + (p.spread_m * 1.5) * Vec3(u(rng), u(rng), u(rng));
+                const Vec3 a = at + 2e-4 * Vec3(u(rng), u(rng), u(rng)), bb = at + 2e-4 * Vec3(u(rng), u(rng), u(rng)),
+                           c = at + 2e-4 * Vec3(u(rng), u(rng), u(rng));
+                const Vec3 hint = centre - at;
+                const DistanceBounds x = convex_triangle_distance(with, a, bb, c, 1e300, 1e-13, 64, &hint);
+                const DistanceBounds y = convex_triangle_distance(without, a, bb, c, 1e300, 1e-13, 64, &hint);
+                // Where two vertices tie along a direction the descent may take the other one:
+                // the search then runs its own way to the same bounds, but for rounding.
+                ASSERT_NEAR(x.lower, y.lower, 1e-13) << "piece " << k << " trial " << trial;
+                ASSERT_NEAR(x.upper, y.upper, 1e-13) << "piece " << k << " trial " << trial;
+            }
+        }
+    }
+    // Both boxes of the bent probe and at least the working tip of every probe.
+    EXPECT_GE(certified, 2 + int(std::size(kAllProbeKinds)));
+
+    // A box whose top face has a vertex at its middle: certified, and a descent from there
+    // starts at a corner of the face, so it does not stop on the face (along +y every neighbour
+    // of the middle is as high) but goes down to the bottom.
+    const auto up = [](const TriMesh& m, const std::array<uint32_t, 3>& tri) {
+        return m.vertices[tri[0]].y > 0 && m.vertices[tri[1]].y > 0 && m.vertices[tri[2]].y > 0;
+    };
+    TriMesh centred = make_box(Vec3(1 * mm, 1 * mm, 1 * mm), Vec3(0.0));
+    {
+        std::vector<std::array<uint32_t, 3>> kept, top;
+        for (const auto& tri : centred.triangles) (up(centred, tri) ? top : kept).push_back(tri);
+        ASSERT_EQ(top.size(), 2u);
+        const uint32_t mid = uint32_t(centred.vertices.size());
+        centred.vertices.push_back(Vec3(0.0, 1 * mm, 0.0));
+        // Each boundary edge of the top face (in one of its two triangles only) fanned to the middle.
+        for (size_t t = 0; t < 2; ++t)
+            for (size_t e = 0; e < 3; ++e) {
+                const uint32_t v0 = top[t][e], v1 = top[t][(e + 1) % 3];
+                bool shared = false;
+                for (size_t f = 0; f < 3; ++f) shared |= top[1 - t][f] == v1 && top[1 - t][(f + 1) % 3] == v0;
+                if (!shared) kept.push_back({v0, v1, mid});
+            }
+        centred.triangles = kept;
+        const ModelBuild b = build_model(centred, {}, RendererSettings{});
+        ASSERT_TRUE(b.model) << b.error;
+        const ModelTool& tool = b.model->tool;
+        ASSERT_EQ(tool.pieces.size(), 1u);
+        EXPECT_TRUE(tool.pieces[0].descend);
+        const int least = least_along(tool.mesh.vertices.data(), int(tool.mesh.vertices.size()),
+                                      tool.neighbour_offsets.data(), tool.neighbours.data(), tool.descent_start.data(),
+                                      Vec3(0.0, 1.0, 0.0), int(mid));
+        EXPECT_NEAR(tool.mesh.vertices[size_t(least)].y, -1 * mm, 1e-12);
+    }
+    // A box with a vertex in the middle of one of its edges: the edge between the two corners
+    // is lost to a descent over corners, so the box is not certified.
+    TriMesh split = make_box(Vec3(1 * mm, 1 * mm, 1 * mm), Vec3(0.0));
+    {
+        const MeshTopology topo = build_topology(split);
+        const MeshEdge* edge = nullptr;
+        for (const MeshEdge& e : topo.edges)
+            if (e.convexity == Convexity::Convex) {
+                edge = &e;
+                break;
+            }
+        ASSERT_NE(edge, nullptr);
+        const uint32_t mid = uint32_t(split.vertices.size());
+        split.vertices.push_back(0.5 * (split.vertices[edge->v[0]] + split.vertices[edge->v[1]]));
+        std::vector<std::array<uint32_t, 3>> tris;
+        for (const auto& tri : split.triangles) {
+            bool cut = false;
+            for (size_t k = 0; k < 3 && !cut; ++k) {
+                const uint32_t x = tri[k], y = tri[(k + 1) % 3], z = tri[(k + 2) % 3];
+                if ((x == edge->v[0] && y == edge->v[1]) || (x == edge->v[1] && y == edge->v[0])) {
+                    tris.push_back({x, mid, z});
+                    tris.push_back({mid, y, z});
+                    cut = true;
+                }
+            }
+            if (!cut) tris.push_back(tri);
+        }
+        split.triangles = tris;
+        const ModelBuild b = build_model(split, {}, RendererSettings{});
+        ASSERT_TRUE(b.model) << b.error;
+        ASSERT_EQ(b.model->tool.pieces.size(), 1u);
+        EXPECT_FALSE(b.model->tool.pieces[0].descend);
+    }
 }
 
 TEST(ToolPieces, RejectsANonConvexPieceAndTooManyPieces) {

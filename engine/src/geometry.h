@@ -48,7 +48,49 @@ struct ConvexView {
     const Vec3* capsule = nullptr;
     const double* capsule_radii = nullptr;
     int capsule_count = 0;
+    // Optional, for a polytope certified for it (ToolPiece::descend): each corner's neighbouring
+    // corners (vertex i's are neighbours[neighbour_offsets[i], neighbour_offsets[i + 1])) and
+    // the corner a descent from each vertex starts at (itself, or one of its face's for a vertex
+    // inside a flat face). The vertex least along a direction is then found by descending along
+    // them from a nearby vertex: a corner with no neighbour lower is the least of all.
+    const uint32_t* neighbour_offsets = nullptr;
+    const uint32_t* neighbours = nullptr;
+    const uint32_t* start_of = nullptr;
 };
+
+// The index of the vertex least along d of the polytope's `count` vertices. With neighbours
+// (ConvexView::neighbours), by descent: from vertex start_of[start] (a corner of the polytope),
+// to the neighbour least along d while one is lower than where it is. Else, or when start is out
+// of range, by looking at every vertex. Ties go to the first found.
+inline int least_along(const Vec3* vertices, int count, const uint32_t* neighbour_offsets, const uint32_t* neighbours,
+                       const uint32_t* start_of, const Vec3& d, int start) {
+    if (neighbours && start >= 0 && start < count) {
+        int least = int(start_of[start]);
+        double best = glm::dot(d, vertices[least]);
+        for (int at = -1; at != least;) {
+            at = least;
+            for (uint32_t k = neighbour_offsets[at]; k < neighbour_offsets[at + 1]; ++k) {
+                const int u = int(neighbours[k]);
+                const double s = glm::dot(d, vertices[u]);
+                if (s < best) {
+                    best = s;
+                    least = u;
+                }
+            }
+        }
+        return least;
+    }
+    int least = 0;
+    double best = glm::dot(d, vertices[0]);
+    for (int i = 1; i < count; ++i) {
+        const double s = glm::dot(d, vertices[i]);
+        if (s < best) {
+            best = s;
+            least = i;
+        }
+    }
+    return least;
+}
 
 // Distance between segment p0-p1 and triangle (a, b, c); 0 when the segment crosses it.
 double segment_triangle_distance(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& b, const Vec3& c);

@@ -4,7 +4,9 @@
 // Safety does not rest on the simplex arithmetic: every lower bound reported is the gap along a
 // direction v between the polytope's and the triangle's projections, min_D v.z / |v|, which bounds
 // the distance for any v. The simplex only chooses v; rounding in it can cost iterations, never a
-// bound that is too high. The upper bound is |v| for v a point of (the hull of) D.
+// bound that is too high. The upper bound is |v| for v a point of (the hull of) D. On a polytope
+// certified for it (ToolPiece::descend) the vertex least along v is found by descent over its
+// corners, which on such a polytope ends at the least vertex: the same gap.
 #include "geometry.h"
 
 #include <algorithm>
@@ -26,17 +28,19 @@ struct Simplex {
     int n = 0;
 };
 
-// The point of D least along v (the support of D in -v).
-inline Point support_least(const Vec3* poly, int count, const Vec3 tri[3], const Vec3& v) {
-    int ia = 0;
-    double best = glm::dot(v, poly[0]);
-    for (int i = 1; i < count; ++i) {
-        const double s = glm::dot(v, poly[i]);
-        if (s < best) {
-            best = s;
-            ia = i;
-        }
-    }
+// The polytope's vertices and, where certified, the descent over its corners (ConvexView).
+struct Poly {
+    const Vec3* v = nullptr;
+    int count = 0;
+    const uint32_t* offsets = nullptr;
+    const uint32_t* neighbours = nullptr;
+    const uint32_t* start_of = nullptr;
+};
+
+// The point of D least along v (the support of D in -v); on a polytope with neighbours, by
+// descent from vertex `start` (least_along).
+inline Point support_least(const Poly& poly, const Vec3 tri[3], const Vec3& v, int start = 0) {
+    const int ia = least_along(poly.v, poly.count, poly.offsets, poly.neighbours, poly.start_of, v, start);
     int ib = 0;
     double top = glm::dot(v, tri[0]);
     for (int k = 1; k < 3; ++k) {
@@ -46,7 +50,7 @@ inline Point support_least(const Vec3* poly, int count, const Vec3 tri[3], const
             ib = k;
         }
     }
-    return Point{poly[ia] - tri[ib], static_cast<uint16_t>(ia), static_cast<uint8_t>(ib)};
+    return Point{poly.v[ia] - tri[ib], static_cast<uint16_t>(ia), static_cast<uint8_t>(ib)};
 }
 
 // Closest point to the origin of segment a-b; reduces the simplex to the feature holding it.
@@ -160,14 +164,17 @@ DistanceBounds& touching(DistanceBounds& r, const Simplex& s) {
     return r;
 }
 
-DistanceBounds distance_bounds(const Vec3* poly, int count, const Vec3& a, const Vec3& b, const Vec3& c, double cutoff,
+DistanceBounds distance_bounds(const Poly& poly, const Vec3& a, const Vec3& b, const Vec3& c, double cutoff,
                                double tolerance, int max_iterations, const Vec3* hint, const GjkSimplex* warm) {
     DistanceBounds r;
     const Vec3 tri[3] = {a, b, c};
+    const int count = poly.count;
     Simplex s;
     // From the hint, the point of D least along it: often its gap already settles the cutoff.
+    // The descent along edges starts from the earlier simplex's first vertex.
     const bool hinted = hint && glm::dot(*hint, *hint) > 0.0;
-    s.p[0] = hinted ? support_least(poly, count, tri, *hint) : Point{poly[0] - a, 0, 0};
+    const int start = warm && warm->count > 0 ? int(warm->poly[0]) : 0;
+    s.p[0] = hinted ? support_least(poly, tri, *hint, start) : Point{poly.v[0] - a, 0, 0};
     s.n = 1;
     Vec3 v = s.p[0].p;
     double lower = 0.0;
@@ -184,7 +191,7 @@ DistanceBounds distance_bounds(const Vec3* poly, int count, const Vec3& a, const
         Simplex ws;
         for (int k = 0; k < warm->count; ++k) {
             if (warm->poly[k] >= count || warm->tri[k] > 2) continue;
-            const Point q{poly[warm->poly[k]] - tri[warm->tri[k]], warm->poly[k], warm->tri[k]};
+            const Point q{poly.v[warm->poly[k]] - tri[warm->tri[k]], warm->poly[k], warm->tri[k]};
             bool known = false;
             for (int j = 0; j < ws.n; ++j) known |= ws.p[j].ia == q.ia && ws.p[j].ib == q.ib;
             if (!known) ws.p[ws.n++] = q;
@@ -205,7 +212,7 @@ DistanceBounds distance_bounds(const Vec3* poly, int count, const Vec3& a, const
         const double vv = glm::dot(v, v);
         if (vv == 0.0) return touching(r, s);
         const double vl = std::sqrt(vv);
-        const Point w = support_least(poly, count, tri, v);
+        const Point w = support_least(poly, tri, v, s.p[s.n - 1].ia);
         // Every point z of D has v.z >= v.w: the gap along v bounds the distance.
         lower = std::max(lower, glm::dot(v, w.p) / vl);
         r.lower = lower;
@@ -232,13 +239,14 @@ DistanceBounds distance_bounds(const Vec3* poly, int count, const Vec3& a, const
 DistanceBounds convex_triangle_distance(const Vec3* poly, int count, const Vec3& a, const Vec3& b, const Vec3& c,
                                         double cutoff, double tolerance, int max_iterations, const Vec3* hint,
                                         const GjkSimplex* warm) {
-    return distance_bounds(poly, count, a, b, c, cutoff, tolerance, max_iterations, hint, warm);
+    return distance_bounds(Poly{poly, count}, a, b, c, cutoff, tolerance, max_iterations, hint, warm);
 }
 
 DistanceBounds convex_triangle_distance(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c,
                                         double cutoff, double tolerance, int max_iterations, const Vec3* hint,
                                         const GjkSimplex* warm) {
-    return distance_bounds(poly.vertices, poly.vertex_count, a, b, c, cutoff, tolerance, max_iterations, hint, warm);
+    return distance_bounds(Poly{poly.vertices, poly.vertex_count, poly.neighbour_offsets, poly.neighbours, poly.start_of}, a, b, c,
+                           cutoff, tolerance, max_iterations, hint, warm);
 }
 
 }  // namespace sulcus

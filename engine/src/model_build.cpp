@@ -81,6 +81,103 @@ void set_bounding_capsule(const TriMesh& piece_mesh, ToolPiece& tool) {
     tool.capsule_count = (hi - lo) > 4.0 * widest ? K : 0;
 }
 
+// The descent along a convex piece's corners (least_along): each corner's neighbouring corners,
+// and the corner a descent from each vertex starts at. Certified (true) when it finds the vertex
+// least along every direction. It does on a closed, strictly convex surface where a vertex that is
+// not the least has an edge going down from it to a corner: every edge must have two triangles
+// with the far vertex of each on or below the other's plane (rounding aside), and every vertex
+// must be a corner (the triangle normals at it span space) or lie inside a flat face (all its
+// triangles in one plane), never on a straight edge between two corners, where the edge between
+// them would be lost. A vertex inside a face is never the only least one: its face's corners
+// are as low. Last, the descent runs from many vertices along many directions and must find the
+// same value as looking at every vertex.
+bool build_descent(const TriMesh& mesh, const MeshTopology& topo, std::vector<uint32_t>& offsets,
+                   std::vector<uint32_t>& neighbours, std::vector<uint32_t>& start_of) {
+    const auto& vs = mesh.vertices;
+    const size_t n = vs.size();
+    offsets.assign(n + 1, 0);
+    neighbours.clear();
+    start_of.assign(n, 0);
+    const double eps = 1e-13 * mesh_scale(mesh);
+    for (const MeshEdge& e : topo.edges) {
+        if (e.tri[0] == e.tri[1] || e.tri[0] >= mesh.triangles.size() || e.tri[1] >= mesh.triangles.size()) return false;
+        for (int side = 0; side < 2; ++side) {
+            const auto& t = mesh.triangles[e.tri[size_t(1 - side)]];
+            for (uint32_t w : t)
+                if (w != e.v[0] && w != e.v[1] &&
+                    glm::dot(topo.triangle_normals[e.tri[size_t(side)]], vs[w] - vs[e.v[0]]) > eps)
+                    return false;
+        }
+    }
+    std::vector<char> corner(n, 0);
+    for (size_t v = 0; v < n; ++v) {
+        const uint32_t b = topo.vertex_triangle_offsets[v], end = topo.vertex_triangle_offsets[v + 1];
+        if (b == end) return false;
+        bool flat = true;
+        for (uint32_t i = b; i < end; ++i) {
+            const Vec3& ni = topo.triangle_normals[topo.vertex_triangles[i]];
+            flat &= glm::length(ni - topo.triangle_normals[topo.vertex_triangles[b]]) < 1e-9;
+            for (uint32_t j = i + 1; j < end && !corner[v]; ++j)
+                for (uint32_t k = j + 1; k < end && !corner[v]; ++k) {
+                    const Vec3& nj = topo.triangle_normals[topo.vertex_triangles[j]];
+                    const Vec3& nk = topo.triangle_normals[topo.vertex_triangles[k]];
+                    corner[v] = std::abs(glm::dot(ni, glm::cross(nj, nk))) >= 1e-3;
+                }
+        }
+        if (!corner[v] && !flat) return false;
+    }
+    for (size_t v = 0; v < n; ++v) {
+        offsets[v] = uint32_t(neighbours.size());
+        if (!corner[v]) continue;
+        for (uint32_t i = topo.vertex_edge_offsets[v]; i < topo.vertex_edge_offsets[v + 1]; ++i) {
+            const MeshEdge& e = topo.edges[topo.vertex_edges[i]];
+            const uint32_t u = e.v[0] == v ? e.v[1] : e.v[0];
+            if (corner[u]) neighbours.push_back(u);
+        }
+    }
+    offsets[n] = uint32_t(neighbours.size());
+    // A vertex inside a face starts from the nearest corner along the face's edges.
+    for (size_t v = 0; v < n; ++v) {
+        if (corner[v]) {
+            start_of[v] = uint32_t(v);
+            continue;
+        }
+        std::vector<uint32_t> queue{uint32_t(v)};
+        std::vector<char> seen(n, 0);
+        seen[v] = 1;
+        bool found = false;
+        for (size_t q = 0; q < queue.size() && !found; ++q)
+            for (uint32_t i = topo.vertex_edge_offsets[queue[q]]; i < topo.vertex_edge_offsets[queue[q] + 1]; ++i) {
+                const MeshEdge& e = topo.edges[topo.vertex_edges[i]];
+                const uint32_t u = e.v[0] == queue[q] ? e.v[1] : e.v[0];
+                if (seen[u]) continue;
+                seen[u] = 1;
+                if (corner[u]) {
+                    start_of[v] = u;
+                    found = true;
+                    break;
+                }
+                queue.push_back(u);
+            }
+        if (!found) return false;
+    }
+    // Directions spread over the sphere (a Fibonacci lattice), from every vertex or a spread of them.
+    const int count = int(n);
+    const int stride = std::max(1, count / 64);
+    constexpr int kDirections = 400;
+    for (int i = 0; i < kDirections; ++i) {
+        const double z = 1.0 - 2.0 * (i + 0.5) / kDirections, r = std::sqrt(std::max(0.0, 1.0 - z * z));
+        const double phi = i * 2.399963229728653;
+        const Vec3 d(r * std::cos(phi), r * std::sin(phi), z);
+        const double least = glm::dot(d, vs[size_t(least_along(vs.data(), count, nullptr, nullptr, nullptr, d, 0))]);
+        for (int start = 0; start < count; start += stride)
+            if (glm::dot(d, vs[size_t(least_along(vs.data(), count, offsets.data(), neighbours.data(), start_of.data(), d,
+                                                  start))]) != least)
+                return false;
+    }
+    return true;
+}
+
 // One convex piece, appended to the tool's arrays.
 std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
     ToolPiece piece;
@@ -160,6 +257,19 @@ std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
     }
     set_bounding_capsule(mesh, piece);
     {
+        std::vector<uint32_t> offsets, neighbours, start_of;
+        piece.descend = build_descent(mesh, topo, offsets, neighbours, start_of);
+        if (!piece.descend) {
+            offsets.assign(mesh.vertices.size() + 1, 0);
+            neighbours.clear();
+            start_of.assign(mesh.vertices.size(), 0);
+        }
+        const uint32_t base = uint32_t(tool.neighbours.size());
+        for (size_t v = 0; v < mesh.vertices.size(); ++v) tool.neighbour_offsets.push_back(base + offsets[v]);
+        tool.neighbours.insert(tool.neighbours.end(), neighbours.begin(), neighbours.end());
+        tool.descent_start.insert(tool.descent_start.end(), start_of.begin(), start_of.end());
+    }
+    {
         std::vector<uint32_t> order(mesh.vertices.size());
         for (uint32_t v = 0; v < order.size(); ++v) order[v] = v;
         auto coord = [&](uint32_t v) { return glm::dot(piece.axis, mesh.vertices[v]); };
@@ -180,6 +290,7 @@ std::string build_tool(const TriMesh& mesh, ModelTool& tool) {
                std::to_string(kMaxToolPieces);
     for (size_t i = 0; i < parts.size(); ++i)
         if (std::string err = add_piece(parts[i], i, tool); !err.empty()) return err;
+    tool.neighbour_offsets.push_back(uint32_t(tool.neighbours.size()));
     tool.topology = build_topology(tool.mesh);
     return "";
 }

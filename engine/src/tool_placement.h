@@ -45,6 +45,11 @@ inline ConvexView tool_convex_view(const ModelTool& tool, size_t k, const Vec3* 
     v.depths = tool.face_depths.data() + piece.face_begin;
     v.edge_normals = reinterpret_cast<const Vec3 (*)[2]>(tool.edge_normals.data() + piece.edge_begin);
     v.rotation = rotation;
+    if (piece.descend) {
+        v.neighbour_offsets = tool.neighbour_offsets.data() + piece.vertex_begin;
+        v.neighbours = tool.neighbours.data();
+        v.start_of = tool.descent_start.data() + piece.vertex_begin;
+    }
     if (capsule) {
         v.capsule = capsule + k * (kToolCapsules + 1);
         v.capsule_radii = piece.capsule_radii_m.data();

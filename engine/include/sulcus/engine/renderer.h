@@ -136,6 +136,10 @@ struct ToolPiece {
     // order along it are ModelTool::axial_vertices[vertex_begin, + vertex_count), at
     // axial_coords (m): a ball around a point holds only the vertices of one run of them.
     Vec3 axis{0.0, 0.0, 1.0};
+    // Certified at build (closed, strictly convex, every vertex a corner or inside a flat face):
+    // the vertex least along a direction is found by descending along the corners
+    // (ModelTool::neighbours), not by looking at every vertex.
+    bool descend = false;
 };
 
 // The tool: a rigid union of closed convex pieces (the connected components of its mesh, which
@@ -162,6 +166,14 @@ struct ModelTool {
     // piece's axis (axial_coords, m, ascending), contiguous per piece as mesh.vertices.
     std::vector<uint32_t> axial_vertices;
     std::vector<double> axial_coords;
+    // For the descent to the vertex least along a direction (ToolPiece::descend), indices
+    // relative to the piece's first vertex: each corner's neighbouring corners along the piece's
+    // edges (vertex i's, an index into mesh.vertices, are neighbours[neighbour_offsets[i],
+    // neighbour_offsets[i + 1]); none for a vertex inside a flat face), and the corner a
+    // descent from each vertex starts at (itself, or a corner of its face).
+    std::vector<uint32_t> neighbour_offsets;
+    std::vector<uint32_t> neighbours;
+    std::vector<uint32_t> descent_start;
     std::vector<ToolPiece> pieces;
     double radius_m = 0.0;  // largest distance from the local origin to a vertex
 };
