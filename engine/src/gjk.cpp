@@ -28,19 +28,11 @@ struct Simplex {
     int n = 0;
 };
 
-// The polytope's vertices and, where certified, the descent over its corners (ConvexView).
-struct Poly {
-    const Vec3* v = nullptr;
-    int count = 0;
-    const uint32_t* offsets = nullptr;
-    const uint32_t* neighbours = nullptr;
-    const uint32_t* start_of = nullptr;
-};
-
 // The point of D least along v (the support of D in -v); on a polytope with neighbours, by
 // descent from vertex `start` (least_along).
-inline Point support_least(const Poly& poly, const Vec3 tri[3], const Vec3& v, int start = 0) {
-    const int ia = least_along(poly.v, poly.count, poly.offsets, poly.neighbours, poly.start_of, v, start);
+inline Point support_least(const ConvexView& poly, const Vec3 tri[3], const Vec3& v, int start = 0) {
+    const int ia = least_along(poly.vertices, poly.vertex_count, poly.neighbour_offsets, poly.neighbours, poly.start_of,
+                               v, start);
     int ib = 0;
     double top = glm::dot(v, tri[0]);
     for (int k = 1; k < 3; ++k) {
@@ -50,7 +42,7 @@ inline Point support_least(const Poly& poly, const Vec3 tri[3], const Vec3& v, i
             ib = k;
         }
     }
-    return Point{poly.v[ia] - tri[ib], static_cast<uint16_t>(ia), static_cast<uint8_t>(ib)};
+    return Point{poly.vertices[ia] - tri[ib], static_cast<uint16_t>(ia), static_cast<uint8_t>(ib)};
 }
 
 // Closest point to the origin of segment a-b; reduces the simplex to the feature holding it.
@@ -164,17 +156,17 @@ DistanceBounds& touching(DistanceBounds& r, const Simplex& s) {
     return r;
 }
 
-DistanceBounds distance_bounds(const Poly& poly, const Vec3& a, const Vec3& b, const Vec3& c, double cutoff,
+DistanceBounds distance_bounds(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c, double cutoff,
                                double tolerance, int max_iterations, const Vec3* hint, const GjkSimplex* warm) {
     DistanceBounds r;
     const Vec3 tri[3] = {a, b, c};
-    const int count = poly.count;
+    const int count = poly.vertex_count;
     Simplex s;
     // From the hint, the point of D least along it: often its gap already settles the cutoff.
     // The descent along edges starts from the earlier simplex's first vertex.
     const bool hinted = hint && glm::dot(*hint, *hint) > 0.0;
     const int start = warm && warm->count > 0 ? int(warm->poly[0]) : 0;
-    s.p[0] = hinted ? support_least(poly, tri, *hint, start) : Point{poly.v[0] - a, 0, 0};
+    s.p[0] = hinted ? support_least(poly, tri, *hint, start) : Point{poly.vertices[0] - a, 0, 0};
     s.n = 1;
     Vec3 v = s.p[0].p;
     double lower = 0.0;
@@ -191,7 +183,7 @@ DistanceBounds distance_bounds(const Poly& poly, const Vec3& a, const Vec3& b, c
         Simplex ws;
         for (int k = 0; k < warm->count; ++k) {
             if (warm->poly[k] >= count || warm->tri[k] > 2) continue;
-            const Point q{poly.v[warm->poly[k]] - tri[warm->tri[k]], warm->poly[k], warm->tri[k]};
+            const Point q{poly.vertices[warm->poly[k]] - tri[warm->tri[k]], warm->poly[k], warm->tri[k]};
             bool known = false;
             for (int j = 0; j < ws.n; ++j) known |= ws.p[j].ia == q.ia && ws.p[j].ib == q.ib;
             if (!known) ws.p[ws.n++] = q;
@@ -239,14 +231,16 @@ DistanceBounds distance_bounds(const Poly& poly, const Vec3& a, const Vec3& b, c
 DistanceBounds convex_triangle_distance(const Vec3* poly, int count, const Vec3& a, const Vec3& b, const Vec3& c,
                                         double cutoff, double tolerance, int max_iterations, const Vec3* hint,
                                         const GjkSimplex* warm) {
-    return distance_bounds(Poly{poly, count}, a, b, c, cutoff, tolerance, max_iterations, hint, warm);
+    ConvexView view;
+    view.vertices = poly;
+    view.vertex_count = count;
+    return distance_bounds(view, a, b, c, cutoff, tolerance, max_iterations, hint, warm);
 }
 
 DistanceBounds convex_triangle_distance(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c,
                                         double cutoff, double tolerance, int max_iterations, const Vec3* hint,
                                         const GjkSimplex* warm) {
-    return distance_bounds(Poly{poly.vertices, poly.vertex_count, poly.neighbour_offsets, poly.neighbours, poly.start_of}, a, b, c,
-                           cutoff, tolerance, max_iterations, hint, warm);
+    return distance_bounds(poly, a, b, c, cutoff, tolerance, max_iterations, hint, warm);
 }
 
 }  // namespace sulcus
