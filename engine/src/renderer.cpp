@@ -81,6 +81,9 @@ constexpr int kMaxToolEdges = 3 * kMaxToolVertices;
 static_assert(kToolCapsules <= 16, "Bvh::query_capsule_chain takes at most 16 capsules");
 constexpr int kMaxNear = 8192;
 constexpr int kMaxAtoms = 1024;
+// Triangles the guard finds the atoms let the tool into, taken in one round: all of them as a
+// rule (deep in the tissue some sixty at once), so that the candidate is solved again once.
+constexpr int kMaxMissed = 64;
 constexpr int kMaxFeatures = 4096;  // tool vertices against object features, per gather
 constexpr int kMaxObjFeatures = 3 * kMaxNear;  // object vertices or edges: three per near triangle
 constexpr int kMaxAlts = 32;
@@ -165,6 +168,9 @@ struct CandidateResult {
     double error = 0.0;
     int relinearizations = 0;
     int atom_count = 0;
+    // The answer is the first QP's since the step's start (or since the guard last added planes):
+    // its rows are linearized at x = 0, as every candidate's first QP is.
+    bool from_start = false;
 };
 
 // Scratch memory of the step: allocated once per thread, reused every tick.
@@ -213,6 +219,12 @@ struct Workspace {
     int alt_count = 0;
     Atom cand[kMaxAtoms];
     int cand_count = 0;
+    // The separating planes' atoms the guard added to the candidate being solved, and those the
+    // default candidate needed (every other candidate starts with them).
+    Atom planes[kMaxAtoms];
+    int plane_count = 0;
+    Atom shared_planes[kMaxAtoms];
+    int shared_plane_count = 0;
     Atom best[kMaxAtoms];
     int best_count = 0;
     // Compliance of the candidate being solved and of the best one: each atom's slack zone
@@ -1510,7 +1522,11 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         return value_with_give(model, w.cand[i], at, slot, slot_depth(w.slacks, slot, x));
     };
     int guard_rounds = 0;
+    w.plane_count = 0;
+    bool at_start = true;  // x is the step's start
     for (int it = 0; it < S.max_relinearizations; ++it) {
+        const bool linearized_at_start = at_start;
+        at_start = false;
         const ToolPoseAt at = tool_pose_at(base, x);
         if (w.cand_count > qp::kMaxRows) order_rows(model, w, at, x);
         const int rows = std::min(w.cand_count, qp::kMaxRows);
@@ -1568,8 +1584,7 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         // compliant one: by no more than its zone gives way). Planes at the new pose for the
         // check, then restored to the start pose.
         int missed = 0;
-        NearTri missed_tris[8];
-        uint8_t missed_piece[8];
+        int missed_tris[kMaxMissed];  // indices into w.near
         // No point of a piece moved further than this from the step's start: a triangle that was
         // further than that from the piece there cannot be reached, nor can one whose separation
         // there (along its separating axis) leaves room for that motion. The separations at the
@@ -1621,7 +1636,7 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             w.moved_face_q = nx.q;
             moved_placed = true;
         };
-        for (int i = 0; i < w.near_count && missed < 8; ++i) {
+        for (int i = 0; i < w.near_count && missed < kMaxMissed; ++i) {
             const double moved_by = shift + turn * model.tool.pieces[w.near[i].piece].radius_m;
             if (w.near[i].lower_m > moved_by) continue;
             const double give_i = triangle_zone_depth(model, w.slacks, w.near[i]);
@@ -1649,8 +1664,7 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
                 continue;
             if ((compliant ? witness : separation_witness(model, moved, w.near[i], floor, w)) < floor &&
                 separation_test(model, moved, w.near[i], w) < floor) {
-                missed_piece[missed] = uint8_t(k);
-                missed_tris[missed++] = w.near[i];
+                missed_tris[missed++] = i;
             }
         }
         if (missed == 0) {
@@ -1660,15 +1674,22 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             for (int v = qp::kPoseVars; v < vars; ++v) r.energy += 0.5 * P.weight[v] * x[v] * x[v];
             r.error = worst;
             r.atom_count = w.cand_count;
+            r.from_start = linearized_at_start;
             if (model.any_friction) record_friction(model, nx, rows, w);
             return r;
         }
         if (++guard_rounds > 4) return r;
-        for (int m = 0; m < missed; ++m) add_separating_plane(model, missed_tris[m], missed_piece[m], reach, w);
+        for (int m = 0; m < missed; ++m) {
+            const NearTri& nt = w.near[missed_tris[m]];
+            const int first = w.cand_count;
+            add_separating_plane(model, nt, nt.piece, reach, w);
+            for (int i = first; i < w.cand_count && w.plane_count < kMaxAtoms; ++i) w.planes[w.plane_count++] = w.cand[i];
+        }
         set_slack_vars();
         // Start again from the step's start with the added planes.
         for (double& v : x) v = 0.0;
         w.warm.count = 0;
+        at_start = true;
     }
     return r;
 }
@@ -1697,10 +1718,15 @@ Vec3 contact_point(const Model& model, const Atom& a, const ToolPoseAt& t) {
 // solve + select: every candidate set within the box; the feasible one of least energy wins
 // (ties keep the lower index, for determinism). Leaves the winner's atoms in w.best.
 //
-// A candidate swaps one atom of the default set for an alternative. Where the default set was
-// solved by one QP, exactly, with that atom holding nothing (not active, or active with no
-// multiplier), the QP without the atom has the same solution, and adding the alternative cannot
-// lower its energy: the candidate cannot win, and is not solved.
+// A candidate swaps one atom of the default set for an alternative, and starts with the separating
+// planes the guard gave the default set (the triangles it missed are as near for every candidate).
+// Where the default set's answer is the first QP from the step's start over its atoms and planes,
+// exact, with that atom holding nothing (not active, or active with no multiplier), the QP without
+// the atom has the same solution, and adding the alternative cannot lower its energy: the
+// candidate's own first QP, which differs from that one by the swap alone, has no less energy, and
+// what the guard adds to it can only raise it. It cannot win, and is not solved. (Where the atoms
+// outnumber the QP's rows and the most binding are taken, the swap can also move the least binding
+// row out; that row held nothing in the cases measured.)
 bool solve_candidates(const Model& model, const Pose& base, const Mat3& frame, const double target[6],
                       const double target_local[6], const double lower[6], const double upper[6], double reach,
                       const State& state, Workspace& w, StepStats& stats, double x_out[6]) {
@@ -1709,24 +1735,39 @@ bool solve_candidates(const Model& model, const Pose& base, const Mat3& frame, c
     bool found = false;
     // Whether each atom of the default set holds at its solution (when that solution qualifies).
     bool plain_default = false;
-    bool holds[qp::kMaxRows] = {};
+    bool holds[kMaxAtoms];
+    w.shared_plane_count = 0;
     for (int c = 0; c < candidates; ++c) {
-        if (c > 0 && plain_default && !holds[w.alts[c - 1].replace]) continue;
+        if (c > 0 && plain_default && model.settings.skip_idle_candidates && !holds[w.alts[c - 1].replace]) continue;
         w.cand_count = w.atom_count;
         std::copy(w.atoms, w.atoms + w.atom_count, w.cand);
-        if (c > 0) w.cand[w.alts[c - 1].replace] = w.alts[c - 1].atom;
+        if (c > 0) {
+            w.cand[w.alts[c - 1].replace] = w.alts[c - 1].atom;
+            for (int i = 0; i < w.shared_plane_count && w.cand_count < kMaxAtoms; ++i)
+                w.cand[w.cand_count++] = w.shared_planes[i];
+        }
         const CandidateResult cr =
             solve_candidate(model, base, frame, target, target_local, lower, upper, reach, state.active,
                             state.active_count, w, stats);
         ++stats.candidates;
-        if (c == 0 && cr.ok && cr.relinearizations == 1 && w.cand_count == w.atom_count &&
-            w.atom_count <= qp::kMaxRows) {
-            // One QP over the default atoms in their order (no separating planes added, no rows
-            // reordered): its rows are the atoms.
+        if (c == 0) {
+            w.shared_plane_count = w.plane_count;
+            std::copy(w.planes, w.planes + w.plane_count, w.shared_planes);
+        }
+        if (c == 0 && cr.ok && cr.from_start) {
+            // The rows are the atoms and planes, in their order or (more of them than rows) the
+            // most binding first: an atom holds where a row the same as it does.
             plain_default = true;
+            std::fill(holds, holds + w.atom_count, false);
             for (int k = 0; k < w.solution.active_count; ++k) {
                 const int row = w.solution.active[k];
-                if (row >= 0 && row < w.atom_count && w.solution.multipliers[k] > 0.0) holds[row] = true;
+                if (row < 0 || row >= w.cand_count || !(w.solution.multipliers[k] > 0.0)) continue;
+                if (w.cand_count == w.atom_count && w.cand_count <= qp::kMaxRows) {
+                    holds[row] = true;
+                    continue;
+                }
+                for (int i = 0; i < w.atom_count; ++i)
+                    if (w.atoms[i].same_as(w.cand[row])) holds[i] = true;
             }
         }
         if (cr.ok && cr.energy < best_energy) {

@@ -63,6 +63,11 @@ struct RendererSettings {
     // pass of a tick likewise narrows the earlier pass's near set. Changes the step's cost, not its
     // results (off: every tick and pass measures from scratch).
     bool near_cache = true;
+    // Leave out a candidate that swaps an atom holding nothing in the default set's answer for
+    // its alternative (that answer the first QP from the step's start): it cannot have less
+    // energy (docs/renderer.md, solve). Off: every candidate is solved. Changes the step's cost,
+    // not which candidate wins.
+    bool skip_idle_candidates = true;
     qp::Settings qp;
 };
 
