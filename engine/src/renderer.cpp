@@ -253,7 +253,10 @@ struct Workspace {
         uint64_t key = 0;
         Vec3 axis{0.0};
     };
-    static constexpr int kSatMemo = 256;
+    // 4,096 slots: in the tissue some 800 gingiva triangles are near the probe, and 256 slots
+    // lost the axes of most of those the guard tests tick after tick.
+    static constexpr int kSatMemoBits = 12;
+    static constexpr int kSatMemo = 1 << kSatMemoBits;
     SatMemo sat_memo[kSatMemo];
 };
 
@@ -1442,7 +1445,7 @@ uint64_t sat_memo_key(const NearTri& nt) {
     return ((uint64_t(nt.object) << 40) | (uint64_t(nt.tri) << 8) | nt.piece) + 1;
 }
 Workspace::SatMemo& sat_memo_slot(uint64_t key, Workspace& w) {
-    return w.sat_memo[((key * 0x9E3779B97F4A7C15ull) >> 56) % Workspace::kSatMemo];
+    return w.sat_memo[(key * 0x9E3779B97F4A7C15ull) >> (64 - Workspace::kSatMemoBits)];
 }
 
 // The larger of the two witnesses' gaps, the second only where the first falls short of `floor`.
