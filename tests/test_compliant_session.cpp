@@ -59,6 +59,36 @@ TEST(CompliantSession, LeaningInTheTissueNeedsNoPassAfterPass) {
     EXPECT_LE(extra, contact / 100);
 }
 
+// At the end of the session the probe is drawn out of the tissue faster than the force-continuity
+// limit lets the graphic tool follow: the step releases it to the haptic pose. The step's box
+// then reaches some 2 mm (the energy bound lets the tool turn far), which brought in more gingiva
+// triangles than the near list holds, so the step halved the motion and, with a thousand atoms
+// and the atom list full, ended short of the haptic pose (6 ms). The straight motion's box
+// settles it: the released tick ends at the haptic pose, nothing truncated.
+TEST(CompliantSession, DrawingOutOfTheTissueReleasesTheToolToTheHapticPose) {
+    const cli::BenchScene b = load_session();
+    ASSERT_FALSE(b.ticks.empty());
+    RendererSettings settings;
+    settings.haptic = b.scene.haptic;
+    ModelBuild mb = build_model(b.scene.tool.mesh, b.scene.objects, settings, b.scene.materials);
+    ASSERT_TRUE(mb.model) << mb.error;
+    State state = make_state(b.ticks.front());
+    int released = 0, released_short = 0, truncated = 0, partial = 0;
+    for (size_t i = 0; i < b.ticks.size(); ++i) {
+        const StepResult r = step(*mb.model, state, b.ticks[i]);
+        truncated += r.stats.gather_truncated;
+        partial += r.status == StepStatus::Partial;
+        if (!r.stats.released) continue;
+        ++released;
+        const bool at_haptic = r.graphic.position == b.ticks[i].position;
+        released_short += r.status != StepStatus::Contact && !at_haptic;
+    }
+    EXPECT_GE(released, 1);
+    EXPECT_EQ(released_short, 0);
+    EXPECT_EQ(partial, 0);
+    EXPECT_EQ(truncated, 0);
+}
+
 // Leaning in the tissue, the guard finds some sixty gingiva triangles the atoms let the shank
 // into. It takes all of them at once, so each candidate is solved at most twice (its first QP,
 // and once more with their separating planes: the linearization itself converges at once here).

@@ -171,6 +171,8 @@ struct CandidateResult {
     // The answer is the first QP's since the step's start (or since the guard last added planes):
     // its rows are linearized at x = 0, as every candidate's first QP is.
     bool from_start = false;
+    // A bound of the box on a pose coordinate holds the answer (active with a multiplier).
+    bool box_held = false;
 };
 
 // Scratch memory of the step: allocated once per thread, reused every tick.
@@ -227,6 +229,7 @@ struct Workspace {
     int shared_plane_count = 0;
     Atom best[kMaxAtoms];
     int best_count = 0;
+    bool best_box_held = false;  // a bound of the box holds the chosen candidate's answer
     // Compliance of the candidate being solved and of the best one: each atom's slack zone
     // (-1: rigid) and the zones' slacks.
     int8_t cand_slot[kMaxAtoms];
@@ -1678,6 +1681,12 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             r.error = worst;
             r.atom_count = w.cand_count;
             r.from_start = linearized_at_start;
+            for (int k = 0; k < w.solution.active_count; ++k) {
+                const int row = w.solution.active[k];
+                const bool pose_bound = (row >= qp::kBoxLower && row < qp::kBoxLower + qp::kPoseVars) ||
+                                        (row >= qp::kBoxUpper && row < qp::kBoxUpper + qp::kPoseVars);
+                r.box_held |= pose_bound && w.solution.multipliers[k] > 0.0;
+            }
             if (model.any_friction) record_friction(model, nx, rows, w);
             return r;
         }
@@ -1779,6 +1788,7 @@ bool solve_candidates(const Model& model, const Pose& base, const Mat3& frame, c
             for (int j = 0; j < 6; ++j) x_out[j] = cr.x[j];
             stats.relinearizations = cr.relinearizations;
             stats.constraint_error_m = cr.error;
+            w.best_box_held = cr.box_held;
             w.best_count = w.cand_count;
             std::copy(w.cand, w.cand + w.cand_count, w.best);
             std::copy(w.cand_slot, w.cand_slot + w.cand_count, w.best_slot);
@@ -2168,11 +2178,34 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             // a distance) is released: it goes as far as the step's box lets it, which reaches
             // further, so the triangles and atoms are gathered again. A contact held on an
             // extended plane is taken on by another pass instead.
+            //
+            // The released tool is first solved in the box of the straight motion to the target
+            // (per coordinate between the start and the target): where no bound of that box holds
+            // its answer, the answer stands in the step's box too (the same QP, with bounds that
+            // hold nothing), and only what the straight box reaches is gathered. The step's box
+            // reaches much further (the energy bound lets the tool turn far): lifting the probe
+            // out of the tissue it brought in thousands of gingiva triangles.
             const ContactCheck cc = solved ? check_contacts(model, base, x_sol, w) : ContactCheck{};
             bool at_target = solved;
             for (int j = 0; j < 6 && at_target; ++j) at_target = x_sol[j] == target[j];
-            if (solved && !cc.real && !cc.virtual_only && !at_target) {
+            const bool released = solved && !cc.real && !cc.virtual_only && !at_target;
+            if (released) {
                 res.stats.released = true;
+                double straight_lo[6], straight_hi[6];
+                for (int j = 0; j < 6; ++j) {
+                    straight_lo[j] = std::max(lower[j], std::min(0.0, target_local[j]));
+                    straight_hi[j] = std::min(upper[j], std::max(0.0, target_local[j]));
+                }
+                reach = box_reach(S, model.tool.radius_m, straight_lo, straight_hi);
+                solved = gather_near(model, base, w.tool_world, straight_lo, straight_hi, reach, w, false, prior_frame);
+                if (solved) {
+                    res.stats.gather_truncated |= !gather_atoms(model, base, reach, push, w);
+                    solved = solve_candidates(model, base, frame, target, target_local, straight_lo, straight_hi, reach,
+                                              state, w, res.stats, x_sol) &&
+                             !w.best_box_held;
+                }
+            }
+            if (released && !solved) {
                 reach = box_reach(S, model.tool.radius_m, lower, upper);
                 if (!gather_near(model, base, w.tool_world, lower, upper, reach, w, false, prior_frame)) {
                     solved = false;
