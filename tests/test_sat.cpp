@@ -124,6 +124,37 @@ TEST(SeparatingAxis, NoGapAlongAnAxisExceedsTheSeparation) {
     EXPECT_GT(normal_enough, 100);  // the triangle's normal is often the axis itself
 }
 
+// A triangle vertex deeper inside the polytope than -floor puts their separation below floor.
+TEST(SeparatingAxis, AVertexDeepInsideBoundsTheSeparation) {
+    PlacedTool pt(make_probe_tip_collision(ProbeKind::Williams));
+    ASSERT_TRUE(pt.mb.model) << pt.mb.error;
+    const double scale = 1e-3;
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int deep = 0, shallow = 0;
+    for (int t = 0; t < 3000; ++t) {
+        pt.place(glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng))), Vec3(u(rng), u(rng), u(rng)) * 0.2 * scale);
+        const ConvexView view = pt.view(true);
+        // A vertex pulled part of the way from a tool vertex towards the tool's centre.
+        Vec3 centre(0.0);
+        for (int v = 0; v < view.vertex_count; ++v) centre += view.vertices[v] / double(view.vertex_count);
+        const Vec3 corner = view.vertices[size_t(rng() % size_t(view.vertex_count))];
+        const Vec3 a = corner + 0.5 * (u(rng) + 1.0) * (centre - corner);
+        const double s = scale * (0.05 + 0.5 * (u(rng) + 1.0));
+        const Vec3 b = a + s * Vec3(u(rng), u(rng), u(rng)), d = a + s * Vec3(u(rng), u(rng), u(rng));
+        const double floor = -scale * 0.1 * (u(rng) + 1.0);
+        const double separation = separate_convex_triangle(view, a, b, d).separation;
+        if (vertex_deep_inside(view, a, b, d, floor)) {
+            ++deep;
+            EXPECT_LT(separation, floor) << "trial " << t;
+        } else if (separation < 0.0 && separation >= floor) {
+            ++shallow;  // overlapping, but less than -floor: not deep
+        }
+    }
+    EXPECT_GT(deep, 300);
+    EXPECT_GT(shallow, 100);
+}
+
 }  // namespace
 }  // namespace sulcus
 

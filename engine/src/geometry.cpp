@@ -107,6 +107,15 @@ double gap_along_axis(const ConvexView& poly, const Vec3& n, const Vec3& a, cons
     return axis_separation(poly, n, a, b, c, sign);
 }
 
+bool vertex_deep_inside(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c, double floor) {
+    for (const Vec3* p : {&a, &b, &c}) {
+        bool deep = true;
+        for (int f = 0; f < poly.face_count && deep; ++f) deep = glm::dot(poly.normals[f], *p) - poly.offsets[f] < floor;
+        if (deep) return true;
+    }
+    return false;
+}
+
 SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c) {
     SatResult best;
     best.separation = -1e300;

@@ -1657,10 +1657,16 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             const bool compliant = model.objects[w.near[i].object].compliant;
             const double witness = compliant ? separation_witness(model, moved, w.near[i], floor, w) : -1e300;
             if (witness >= floor) continue;
-            ++w.tests;
             const ModelObject& obj = model.objects[w.near[i].object];
             const auto& t = obj.mesh.triangles[w.near[i].tri];
             const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
+            // In the tissue a missed triangle mostly has a vertex deep inside the piece, which says
+            // so at the cost of a few face planes.
+            if (compliant && vertex_deep_inside(moved, t0, t1, t2, floor)) {
+                missed_tris[missed++] = i;
+                continue;
+            }
+            ++w.tests;
             // Apart (GJK finds a gap along some direction): nothing to measure.
             const Vec3& dir = w.near[i].direction;
             const GjkSimplex& sx = w.near[i].simplex;
