@@ -849,6 +849,18 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         const Vec3& n = obj.topology.triangle_normals[nt.tri];
         const double back = back_of(nt.object), far = reach_of(nt.object);
         const ToolPiece& piece = tool.pieces[nt.piece];
+        // A triangle the piece is further than `far` from (by detect's lower bound: in the tissue,
+        // the capsules' bound of the gingiva triangles in the piece's box) is that far from every
+        // vertex and edge of the piece: no V-F or E-E atom. Its vertices may still face a tool
+        // face within the reach (F-V).
+        if (nt.lower_m > far) {
+            for (int k = 0; k < 3; ++k) {
+                const Convexity cv = obj.topology.vertex_convexity[t[k]];
+                if (cv == Convexity::Convex || cv == Convexity::Mixed)
+                    w.overts[w.overt_count++] = obj_feature(nt.object, t[k], nt.piece);
+            }
+            continue;
+        }
         // No point further than `far` from the triangle's bounding sphere is within `far` of it.
         const TriangleSphere ts = triangle_sphere(p0, p1, p2);
         const double sphere = ts.radius + far;
