@@ -121,3 +121,21 @@ TEST(Ccd, AgreesWithBruteForceSamplingOnRandomMotions) {
     EXPECT_GT(hits, 5);
     EXPECT_GT(misses, 5);
 }
+
+TEST(Ccd, AContactAtTheEndSettlesTheFirstContactSearchAtOnce) {
+    // A cube sliding 2 mm along a slab while it comes down 11 um onto it from 10 um above: the
+    // advances towards the contact are about 10 um of the 2 mm each, so the full search takes
+    // many; stopping at the first contact, a look at the end of the motion finds it, after a
+    // few triangles the cube does not end on.
+    CcdCase c(make_box(Vec3(1 * mm)), make_box(Vec3(20 * mm, 0.5 * mm, 20 * mm)));
+    const Pose base = pose(Vec3(0, 1.5 * mm + 10e-6, 0));
+    const double x[6] = {2 * mm, -11e-6, 0, 0, 0, 0};
+    const CcdResult full = c.run(base, x, 1e-6);
+    const CcdResult first = c.run(base, x, 1e-6, true);
+    EXPECT_TRUE(full.hit);
+    EXPECT_TRUE(first.hit);
+    EXPECT_GT(full.iterations, 20);
+    EXPECT_LE(4 * first.tests, full.tests) << first.tests << " " << full.tests;
+    std::vector<PlacedMesh> objs{PlacedMesh{&c.object_mesh, Pose{}}};
+    EXPECT_LE(exact_check(c.tool, c.at(base, x, first.toi), objs, 1.0).distance_m, 1e-6 + 1e-12);
+}

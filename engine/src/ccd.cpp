@@ -59,6 +59,22 @@ CcdResult conservative_advancement(const Model& model, const Pose& base, const d
                 }
                 done = true;
             } else {
+                if (first_only && it == 0) {
+                    // Only whether there is a contact matters: one at the end of the motion says so
+                    // at once, where the advances towards it would take many small steps (a tool
+                    // coming down onto a surface at a slant, or sliding into a wedge).
+                    ++r.tests;
+                    const Quat qe = glm::conjugate(glm::normalize(quat_exp(limit * th) * base.orientation));
+                    const Vec3 pe = base.position + limit * dp;
+                    const Vec3 ea = qe * (world[0] - pe), eb = qe * (world[1] - pe), ec = qe * (world[2] - pe);
+                    double de = capsule_lower_bound(view, ea, eb, ec);
+                    if (de <= clearance) de = convex_triangle_distance(view, ea, eb, ec, clearance).lower;
+                    if (de <= clearance) {
+                        r.hit = true;
+                        r.toi = limit;
+                        return r;
+                    }
+                }
                 tau += (d - clearance) / speed;
                 done = tau >= limit;
             }
