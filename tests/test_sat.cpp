@@ -124,6 +124,38 @@ TEST(SeparatingAxis, NoGapAlongAnAxisExceedsTheSeparation) {
     EXPECT_GT(normal_enough, 100);  // the triangle's normal is often the axis itself
 }
 
+// The gap along an axis by descent from the last axis's extreme vertices (a certified piece) is
+// the scan's, whether the axes drift slowly (the guard's neighbouring triangles) or jump, and
+// from any start, also one out of range.
+TEST(SeparatingAxis, GapAlongAnAxisByDescentIsTheScans) {
+    PlacedTool pt(make_probe_tip_collision(ProbeKind::Williams));
+    ASSERT_TRUE(pt.mb.model) << pt.mb.error;
+    ASSERT_TRUE(pt.tool->pieces[0].descend);
+    const double scale = 1e-3;
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int extremes[2] = {-1, 1000000};
+    int moved = 0;
+    Vec3 axis = glm::normalize(Vec3(u(rng), u(rng), u(rng)));
+    for (int t = 0; t < 3000; ++t) {
+        if (t % 100 == 0) pt.place(glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng))), Vec3(u(rng), u(rng), u(rng)) * scale);
+        const ConvexView view = pt.view(true);
+        ASSERT_NE(view.neighbours, nullptr);
+        // Mostly a small turn of the last axis, now and then a new one.
+        axis = t % 7 == 0 ? glm::normalize(Vec3(u(rng), u(rng), u(rng)))
+                          : glm::normalize(axis + 0.05 * Vec3(u(rng), u(rng), u(rng)));
+        if (t % 500 == 0) extremes[0] = -5;  // a start out of range: the scan
+        const Vec3 c = pt.verts[size_t(rng() % pt.verts.size())];
+        const double s = scale * (0.05 + 0.5 * (u(rng) + 1.0));
+        const Vec3 a = c + s * Vec3(u(rng), u(rng), u(rng)), b = c + s * Vec3(u(rng), u(rng), u(rng)),
+                   d = c + s * Vec3(u(rng), u(rng), u(rng));
+        const int before = extremes[0];
+        EXPECT_EQ(gap_along_axis(view, axis, a, b, d, extremes), gap_along_axis(view, axis, a, b, d)) << "trial " << t;
+        moved += extremes[0] != before;
+    }
+    EXPECT_GT(moved, 300);  // the starts were not already the answers
+}
+
 // A triangle vertex deeper inside the polytope than -floor puts their separation below floor.
 TEST(SeparatingAxis, AVertexDeepInsideBoundsTheSeparation) {
     PlacedTool pt(make_probe_tip_collision(ProbeKind::Williams));

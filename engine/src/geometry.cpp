@@ -102,9 +102,22 @@ inline double axis_separation(const ConvexView& poly, const Vec3& n, const Vec3&
 
 }  // namespace
 
-double gap_along_axis(const ConvexView& poly, const Vec3& n, const Vec3& a, const Vec3& b, const Vec3& c) {
-    double sign = 1.0;
-    return axis_separation(poly, n, a, b, c, sign);
+double gap_along_axis(const ConvexView& poly, const Vec3& n, const Vec3& a, const Vec3& b, const Vec3& c,
+                      int* extremes) {
+    if (!extremes || !poly.neighbours) {
+        double sign = 1.0;
+        return axis_separation(poly, n, a, b, c, sign);
+    }
+    // The polytope's least and greatest vertices along n by descent from those of the last axis
+    // (the same values as the scan's: a certified descent ends at a least vertex).
+    extremes[0] = least_along(poly.vertices, poly.vertex_count, poly.neighbour_offsets, poly.neighbours,
+                              poly.start_of, n, extremes[0]);
+    extremes[1] = least_along(poly.vertices, poly.vertex_count, poly.neighbour_offsets, poly.neighbours,
+                              poly.start_of, -n, extremes[1]);
+    const double pmin = glm::dot(n, poly.vertices[extremes[0]]), pmax = glm::dot(n, poly.vertices[extremes[1]]);
+    const double ta = glm::dot(n, a), tb = glm::dot(n, b), tc = glm::dot(n, c);
+    const double tmin = std::min(ta, std::min(tb, tc)), tmax = std::max(ta, std::max(tb, tc));
+    return std::max(pmin - tmax, tmin - pmax);
 }
 
 bool vertex_deep_inside(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c, double floor) {

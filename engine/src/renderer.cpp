@@ -258,6 +258,9 @@ struct Workspace {
     };
     // 4,096 slots: in the tissue some 800 gingiva triangles are near the probe, and 256 slots
     // lost the axes of most of those the guard tests tick after tick.
+    // Where the witnesses' last look found each piece's least and greatest vertex along its axis:
+    // the next one's descents start there (neighbouring triangles have nearly the same normal).
+    int gap_extremes[kMaxToolPieces][2] = {};
     static constexpr int kSatMemoBits = 12;
     static constexpr int kSatMemo = 1 << kSatMemoBits;
     SatMemo sat_memo[kSatMemo];
@@ -1469,12 +1472,13 @@ double separation_witness(const Model& model, const ConvexView& view, const Near
     const ModelObject& obj = model.objects[nt.object];
     const auto& t = obj.mesh.triangles[nt.tri];
     const Vec3 &a = obj.mesh.vertices[t[0]], &b = obj.mesh.vertices[t[1]], &c = obj.mesh.vertices[t[2]];
-    const double normal = gap_along_axis(view, obj.topology.triangle_normals[nt.tri], a, b, c);
+    int* extremes = w.gap_extremes[nt.piece];
+    const double normal = gap_along_axis(view, obj.topology.triangle_normals[nt.tri], a, b, c, extremes);
     if (normal >= floor) return normal;
     const uint64_t key = sat_memo_key(nt);
     const Workspace::SatMemo& memo = sat_memo_slot(key, w);
     if (memo.key != key) return normal;
-    return std::max(normal, gap_along_axis(view, memo.axis, a, b, c));
+    return std::max(normal, gap_along_axis(view, memo.axis, a, b, c, extremes));
 }
 
 // The separation by the separating-axis test, its axis kept for the pair's next witness.
