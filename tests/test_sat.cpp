@@ -163,7 +163,7 @@ TEST(SeparatingAxis, AVertexDeepInsideBoundsTheSeparation) {
     const double scale = 1e-3;
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
-    int deep = 0, shallow = 0;
+    int deep = 0, shallow = 0, rejecting = -1;
     for (int t = 0; t < 3000; ++t) {
         pt.place(glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng))), Vec3(u(rng), u(rng), u(rng)) * 0.2 * scale);
         const ConvexView view = pt.view(true);
@@ -176,6 +176,9 @@ TEST(SeparatingAxis, AVertexDeepInsideBoundsTheSeparation) {
         const Vec3 b = a + s * Vec3(u(rng), u(rng), u(rng)), d = a + s * Vec3(u(rng), u(rng), u(rng));
         const double floor = -scale * 0.1 * (u(rng) + 1.0);
         const double separation = separate_convex_triangle(view, a, b, d).separation;
+        // The face that last rejected a vertex, tried first, changes no answer.
+        EXPECT_EQ(vertex_deep_inside(view, a, b, d, floor, &rejecting), vertex_deep_inside(view, a, b, d, floor))
+            << "trial " << t;
         if (vertex_deep_inside(view, a, b, d, floor)) {
             ++deep;
             EXPECT_LT(separation, floor) << "trial " << t;

@@ -120,10 +120,16 @@ double gap_along_axis(const ConvexView& poly, const Vec3& n, const Vec3& a, cons
     return std::max(pmin - tmax, tmin - pmax);
 }
 
-bool vertex_deep_inside(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c, double floor) {
+bool vertex_deep_inside(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c, double floor,
+                        int* rejecting) {
     for (const Vec3* p : {&a, &b, &c}) {
+        const int h = rejecting ? *rejecting : -1;
+        if (h >= 0 && h < poly.face_count && glm::dot(poly.normals[h], *p) - poly.offsets[h] >= floor) continue;
         bool deep = true;
-        for (int f = 0; f < poly.face_count && deep; ++f) deep = glm::dot(poly.normals[f], *p) - poly.offsets[f] < floor;
+        for (int f = 0; f < poly.face_count && deep; ++f) {
+            deep = glm::dot(poly.normals[f], *p) - poly.offsets[f] < floor;
+            if (!deep && rejecting) *rejecting = f;
+        }
         if (deep) return true;
     }
     return false;

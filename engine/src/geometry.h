@@ -122,8 +122,11 @@ double gap_along_axis(const ConvexView& poly, const Vec3& n, const Vec3& a, cons
 // Whether a vertex of triangle (a, b, c) lies below `floor` (< 0) over every face plane of the
 // polytope, i.e. inside it deeper than -floor. The ball of that radius round the vertex is then
 // inside the polytope, so along every axis the two overlap by more: their separation is below
-// floor (what separate_convex_triangle would find), for a few dot products.
-bool vertex_deep_inside(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c, double floor);
+// floor (what separate_convex_triangle would find), for a few dot products. With `rejecting`, the
+// face that last showed a vertex not that deep (an index, or -1) is tried first and receives the
+// next such face: a triangle beside the polytope is settled by one face per vertex.
+bool vertex_deep_inside(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c, double floor,
+                        int* rejecting = nullptr);
 
 // Bounds on the distance between a convex polytope (the hull of `count` points) and triangle
 // (a, b, c), by the GJK iteration: lower <= distance <= upper, both 0 when they overlap or touch.

@@ -261,6 +261,8 @@ struct Workspace {
     // Where the witnesses' last look found each piece's least and greatest vertex along its axis:
     // the next one's descents start there (neighbouring triangles have nearly the same normal).
     int gap_extremes[kMaxToolPieces][2] = {};
+    // The face of each piece that last showed the guard a triangle vertex not deep inside it.
+    int deep_rejecting[kMaxToolPieces] = {};
     static constexpr int kSatMemoBits = 12;
     static constexpr int kSatMemo = 1 << kSatMemoBits;
     SatMemo sat_memo[kSatMemo];
@@ -1678,7 +1680,7 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
             // In the tissue a missed triangle mostly has a vertex deep inside the piece, which says
             // so at the cost of a few face planes.
-            if (compliant && vertex_deep_inside(moved, t0, t1, t2, floor)) {
+            if (compliant && vertex_deep_inside(moved, t0, t1, t2, floor, &w.deep_rejecting[k])) {
                 missed_tris[missed++] = i;
                 continue;
             }
