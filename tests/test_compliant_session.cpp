@@ -27,6 +27,12 @@ cli::BenchScene load_session() {
     return s.scenes.empty() ? cli::BenchScene{} : std::move(s.scenes.front());
 }
 
+// The session's model with `settings` and the scene's haptic settings.
+ModelBuild session_model(const cli::BenchScene& b, RendererSettings settings = {}) {
+    settings.haptic = b.scene.haptic;
+    return build_model(b.scene.tool.mesh, b.scene.objects, settings, b.scene.materials);
+}
+
 TEST(CompliantSession, LeaningInTheTissueNeedsNoPassAfterPass) {
     cli::BenchScenes s = cli::load_bench_scenes({"quadrant_two_regions"}, std::string(SULCUS_SOURCE_DIR) + "/content/assets",
                                                 std::string(SULCUS_BINARY_DIR) + "/cases");
@@ -68,9 +74,7 @@ TEST(CompliantSession, LeaningInTheTissueNeedsNoPassAfterPass) {
 TEST(CompliantSession, DrawingOutOfTheTissueReleasesTheToolToTheHapticPose) {
     const cli::BenchScene b = load_session();
     ASSERT_FALSE(b.ticks.empty());
-    RendererSettings settings;
-    settings.haptic = b.scene.haptic;
-    ModelBuild mb = build_model(b.scene.tool.mesh, b.scene.objects, settings, b.scene.materials);
+    ModelBuild mb = session_model(b);
     ASSERT_TRUE(mb.model) << mb.error;
     State state = make_state(b.ticks.front());
     int released = 0, released_short = 0, truncated = 0, partial = 0;
@@ -99,12 +103,11 @@ TEST(CompliantSession, OneGuardRoundPerCandidateAndIdleCandidatesLeftOut) {
     const cli::BenchScene b = load_session();
     ASSERT_FALSE(b.ticks.empty());
     RendererSettings all;
-    all.haptic = b.scene.haptic;
     all.skip_idle_candidates = false;
     RendererSettings skip = all;
     skip.skip_idle_candidates = true;
-    ModelBuild mb_all = build_model(b.scene.tool.mesh, b.scene.objects, all, b.scene.materials);
-    ModelBuild mb_skip = build_model(b.scene.tool.mesh, b.scene.objects, skip, b.scene.materials);
+    ModelBuild mb_all = session_model(b, all);
+    ModelBuild mb_skip = session_model(b, skip);
     ASSERT_TRUE(mb_all.model) << mb_all.error;
     ASSERT_TRUE(mb_skip.model) << mb_skip.error;
     State s_all = make_state(b.ticks.front()), s_skip = make_state(b.ticks.front());
@@ -141,9 +144,8 @@ TEST(CompliantSession, OneGuardRoundPerCandidateAndIdleCandidatesLeftOut) {
 TEST(CompliantSession, NoTissueTriangleIsEnteredDeeperThanTheTissueGives) {
     const cli::BenchScene b = load_session();
     ASSERT_FALSE(b.ticks.empty());
-    RendererSettings settings;
-    settings.haptic = b.scene.haptic;
-    ModelBuild mb = build_model(b.scene.tool.mesh, b.scene.objects, settings, b.scene.materials);
+    const RendererSettings settings;
+    ModelBuild mb = session_model(b, settings);
     ASSERT_TRUE(mb.model) << mb.error;
     const Model& model = *mb.model;
     const ModelTool& tool = model.tool;

@@ -36,14 +36,20 @@ CcdResult conservative_advancement(const Model& model, const Pose& base, const d
         const ModelObject& obj = model.objects[nt.object];
         const auto& t = obj.mesh.triangles[nt.tri];
         const Vec3 world[3] = {obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]};
+        // The triangle in the tool's frame at motion parameter `at`.
+        auto carried = [&](double at, Vec3 out[3]) {
+            const Quat qi = glm::conjugate(glm::normalize(quat_exp(at * th) * base.orientation));
+            const Vec3 p = base.position + at * dp;
+            for (int k = 0; k < 3; ++k) out[k] = qi * (world[k] - p);
+        };
         double tau = 0.0;
         bool done = false;
         for (int it = 0; it < max_iterations && !done; ++it) {
             ++r.tests;
             r.iterations = std::max(r.iterations, it + 1);
-            const Quat qi = glm::conjugate(glm::normalize(quat_exp(tau * th) * base.orientation));
-            const Vec3 p = base.position + tau * dp;
-            const Vec3 a = qi * (world[0] - p), b = qi * (world[1] - p), c = qi * (world[2] - p);
+            Vec3 tri[3];
+            carried(tau, tri);
+            const Vec3 &a = tri[0], &b = tri[1], &c = tri[2];
             // A distance this large lets the rest of the motion up to the limit go through.
             const double enough = clearance + speed * (limit - tau);
             double d = capsule_lower_bound(view, a, b, c);
@@ -64,11 +70,10 @@ CcdResult conservative_advancement(const Model& model, const Pose& base, const d
                     // at once, where the advances towards it would take many small steps (a tool
                     // coming down onto a surface at a slant, or sliding into a wedge).
                     ++r.tests;
-                    const Quat qe = glm::conjugate(glm::normalize(quat_exp(limit * th) * base.orientation));
-                    const Vec3 pe = base.position + limit * dp;
-                    const Vec3 ea = qe * (world[0] - pe), eb = qe * (world[1] - pe), ec = qe * (world[2] - pe);
-                    double de = capsule_lower_bound(view, ea, eb, ec);
-                    if (de <= clearance) de = convex_triangle_distance(view, ea, eb, ec, clearance).lower;
+                    Vec3 e[3];
+                    carried(limit, e);
+                    double de = capsule_lower_bound(view, e[0], e[1], e[2]);
+                    if (de <= clearance) de = convex_triangle_distance(view, e[0], e[1], e[2], clearance).lower;
                     if (de <= clearance) {
                         r.hit = true;
                         r.toi = limit;

@@ -221,12 +221,10 @@ struct Workspace {
     int alt_count = 0;
     Atom cand[kMaxAtoms];
     int cand_count = 0;
-    // The separating planes' atoms the guard added to the candidate being solved, and those the
-    // default candidate needed (every other candidate starts with them).
+    // The separating planes' atoms the guard adds, in the order it adds them: the default
+    // candidate's come first, and every other candidate starts with them.
     Atom planes[kMaxAtoms];
     int plane_count = 0;
-    Atom shared_planes[kMaxAtoms];
-    int shared_plane_count = 0;
     Atom best[kMaxAtoms];
     int best_count = 0;
     bool best_box_held = false;  // a bound of the box holds the chosen candidate's answer
@@ -258,14 +256,14 @@ struct Workspace {
     };
     // 4,096 slots: in the tissue some 800 gingiva triangles are near the probe, and 256 slots
     // lost the axes of most of those the guard tests tick after tick.
+    static constexpr int kSatMemoBits = 12;
+    static constexpr int kSatMemo = 1 << kSatMemoBits;
+    SatMemo sat_memo[kSatMemo];
     // Where the witnesses' last look found each piece's least and greatest vertex along its axis:
     // the next one's descents start there (neighbouring triangles have nearly the same normal).
     int gap_extremes[kMaxToolPieces][2] = {};
     // The face of each piece that last showed the guard a triangle vertex not deep inside it.
     int deep_rejecting[kMaxToolPieces] = {};
-    static constexpr int kSatMemoBits = 12;
-    static constexpr int kSatMemo = 1 << kSatMemoBits;
-    SatMemo sat_memo[kSatMemo];
 };
 
 Workspace& workspace() {
@@ -858,14 +856,18 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         // the capsules' bound of the gingiva triangles in the piece's box) is that far from every
         // vertex and edge of the piece: no V-F or E-E atom. Its vertices may still face a tool
         // face within the reach (F-V).
-        if (nt.lower_m > far) {
-            for (int k = 0; k < 3; ++k) {
-                const Convexity cv = obj.topology.vertex_convexity[t[k]];
-                if (cv == Convexity::Convex || cv == Convexity::Mixed)
-                    w.overts[w.overt_count++] = obj_feature(nt.object, t[k], nt.piece);
-            }
-            continue;
+        const bool beyond = nt.lower_m > far;
+        // Only convex object vertices (and mixed ones) and convex edges meet the tool's faces
+        // and edges (F-V and E-E below).
+        for (int k = 0; k < 3; ++k) {
+            const Convexity cv = obj.topology.vertex_convexity[t[k]];
+            if (cv == Convexity::Convex || cv == Convexity::Mixed)
+                w.overts[w.overt_count++] = obj_feature(nt.object, t[k], nt.piece);
+            const uint32_t edge = obj.topology.triangle_edges[nt.tri][k];
+            if (!beyond && obj.topology.edges[edge].convexity == Convexity::Convex)
+                w.oedges[w.oedge_count++] = obj_feature(nt.object, edge, nt.piece);
         }
+        if (beyond) continue;
         // No point further than `far` from the triangle's bounding sphere is within `far` of it.
         const TriangleSphere ts = triangle_sphere(p0, p1, p2);
         const double sphere = ts.radius + far;
@@ -904,16 +906,6 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             } else {
                 w.gather_full = true;
             }
-        }
-        // Only convex object vertices (and mixed ones) and convex edges meet the tool's faces
-        // and edges (F-V and E-E below).
-        for (int k = 0; k < 3; ++k) {
-            const Convexity cv = obj.topology.vertex_convexity[t[k]];
-            if (cv == Convexity::Convex || cv == Convexity::Mixed)
-                w.overts[w.overt_count++] = obj_feature(nt.object, t[k], nt.piece);
-            const uint32_t edge = obj.topology.triangle_edges[nt.tri][k];
-            if (obj.topology.edges[edge].convexity == Convexity::Convex)
-                w.oedges[w.oedge_count++] = obj_feature(nt.object, edge, nt.piece);
         }
     }
     std::sort(w.feats, w.feats + w.feat_count);
@@ -1546,7 +1538,6 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         return value_with_give(model, w.cand[i], at, slot, slot_depth(w.slacks, slot, x));
     };
     int guard_rounds = 0;
-    w.plane_count = 0;
     bool at_start = true;  // x is the step's start
     for (int it = 0; it < S.max_relinearizations; ++it) {
         const bool linearized_at_start = at_start;
@@ -1772,24 +1763,21 @@ bool solve_candidates(const Model& model, const Pose& base, const Mat3& frame, c
     // Whether each atom of the default set holds at its solution (when that solution qualifies).
     bool plain_default = false;
     bool holds[kMaxAtoms];
-    w.shared_plane_count = 0;
+    w.plane_count = 0;
+    int shared_planes = 0;  // the default candidate's, w.planes[0, shared_planes)
     for (int c = 0; c < candidates; ++c) {
         if (c > 0 && plain_default && model.settings.skip_idle_candidates && !holds[w.alts[c - 1].replace]) continue;
         w.cand_count = w.atom_count;
         std::copy(w.atoms, w.atoms + w.atom_count, w.cand);
         if (c > 0) {
             w.cand[w.alts[c - 1].replace] = w.alts[c - 1].atom;
-            for (int i = 0; i < w.shared_plane_count && w.cand_count < kMaxAtoms; ++i)
-                w.cand[w.cand_count++] = w.shared_planes[i];
+            for (int i = 0; i < shared_planes && w.cand_count < kMaxAtoms; ++i) w.cand[w.cand_count++] = w.planes[i];
         }
         const CandidateResult cr =
             solve_candidate(model, base, frame, target, target_local, lower, upper, reach, state.active,
                             state.active_count, w, stats);
         ++stats.candidates;
-        if (c == 0) {
-            w.shared_plane_count = w.plane_count;
-            std::copy(w.planes, w.planes + w.plane_count, w.shared_planes);
-        }
+        if (c == 0) shared_planes = w.plane_count;
         if (c == 0 && cr.ok && cr.from_start) {
             // The rows are the atoms and planes, in their order or (more of them than rows) the
             // most binding first: an atom holds where a row the same as it does.
