@@ -187,3 +187,54 @@ TEST(CompliantSession, NoTissueTriangleIsEnteredDeeperThanTheTissueGives) {
 }
 
 }  // namespace
+
+// The guard's planes that held the tool at a tick go on to the next (RendererSettings::
+// carry_planes): leaning in the tissue the same gingiva triangles need them tick after tick, so
+// most ticks then need no QP and guard round to find them again. A tick starting with them keeps
+// what every tick guarantees (no triangle entered deeper than the tissue gives: checked by the
+// separating-axis test above, with the default settings), and ends close to where the same tick
+// without them takes the tool: a carried plane can hold the tool where that tick's guard would
+// not have needed the plane (measured: 40 of 4,286 ticks over 0.1 um apart, at most 1.5 um and
+// 1.5 mN).
+TEST(CompliantSession, CarriedPlanesSpareTheGuardItsRound) {
+    const cli::BenchScene b = load_session();
+    ASSERT_FALSE(b.ticks.empty());
+    RendererSettings fresh;
+    fresh.carry_planes = false;
+    ModelBuild mb_fresh = session_model(b, fresh);
+    ModelBuild mb_carry = session_model(b);
+    ASSERT_TRUE(mb_fresh.model) << mb_fresh.error;
+    ASSERT_TRUE(mb_carry.model) << mb_carry.error;
+    State state = make_state(b.ticks.front());
+    long solves_fresh = 0, solves_carry = 0;
+    int contact = 0, one_solve_fresh = 0, one_solve_carry = 0, carried = 0, held = 0, status_differs = 0;
+    double max_dp = 0.0, max_df = 0.0;
+    for (size_t i = 0; i < b.ticks.size(); ++i) {
+        // The same tick from the same state, without the planes the state carries.
+        State without = state;
+        const StepResult rf = step(*mb_fresh.model, without, b.ticks[i]);
+        EXPECT_EQ(without.held_plane_count, 0);
+        const int held_before = state.held_plane_count;
+        const StepResult rc = step(*mb_carry.model, state, b.ticks[i]);
+        held += rc.status == StepStatus::Held;
+        status_differs += rc.status != rf.status;
+        if (rc.status != StepStatus::Contact) continue;
+        ++contact;
+        carried += held_before > 0;
+        solves_fresh += rf.stats.qp_solves;
+        solves_carry += rc.stats.qp_solves;
+        one_solve_fresh += rf.stats.qp_solves == rf.stats.candidates;
+        one_solve_carry += rc.stats.qp_solves == rc.stats.candidates;
+        max_dp = std::max(max_dp, glm::length(rf.graphic.position - rc.graphic.position));
+        max_df = std::max(max_df, glm::length(rf.force_N - rc.force_N));
+    }
+    std::printf("[carry] contact ticks %d, started with planes %d; one QP per candidate %d -> %d; QPs %ld -> %ld; "
+                "largest differences %.3g m, %.3g N\n",
+                contact, carried, one_solve_fresh, one_solve_carry, solves_fresh, solves_carry, max_dp, max_df);
+    EXPECT_EQ(held, 0);
+    EXPECT_EQ(status_differs, 0);
+    EXPECT_GT(carried, contact / 3);
+    EXPECT_LT(solves_carry * 5, solves_fresh * 4);
+    EXPECT_LE(max_dp, 2e-6);
+    EXPECT_LE(max_df, 2e-3);
+}

@@ -227,6 +227,11 @@ struct Workspace {
     int plane_count = 0;
     Atom best[kMaxAtoms];
     int best_count = 0;
+    // The (triangle, piece) pair a separating plane's atom was made for (plane_key), 0 for a
+    // gathered atom: cand_key, planes_key and best_key run with cand, planes and best.
+    uint64_t cand_key[kMaxAtoms];
+    uint64_t planes_key[kMaxAtoms];
+    uint64_t best_key[kMaxAtoms];
     bool best_box_held = false;  // a bound of the box holds the chosen candidate's answer
     // Compliance of the candidate being solved and of the best one: each atom's slack zone
     // (-1: rigid) and the zones' slacks.
@@ -234,6 +239,7 @@ struct Workspace {
     // Reordering a candidate whose atoms outnumber the QP's rows.
     Atom order_atoms[kMaxAtoms];
     int8_t order_slots[kMaxAtoms];
+    uint64_t order_keys[kMaxAtoms];
     double order_value[kMaxAtoms];
     int order_index[kMaxAtoms];
     Slacks slacks;
@@ -1150,6 +1156,11 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
     return !w.gather_full;
 }
 
+// A (piece, triangle) pair as one number, never 0 (State::held_planes, Workspace::sat_memo).
+uint64_t plane_key(const NearTri& nt) {
+    return ((uint64_t(nt.object) << 40) | (uint64_t(nt.tri) << 8) | nt.piece) + 1;
+}
+
 // The separating plane at the step's start of a triangle that the atoms let a piece of the tool
 // reach: atoms that keep every vertex of the piece (or the triangle's vertices) on its side.
 void add_separating_plane(const Model& model, const NearTri& nt, size_t piece, double reach, Workspace& w) {
@@ -1160,6 +1171,7 @@ void add_separating_plane(const Model& model, const NearTri& nt, size_t piece, d
     const ToolPiece& tp = model.tool.pieces[piece];
     const SatResult sat = separate_convex_triangle(view, p[0], p[1], p[2]);
     const int nv = view.vertex_count;
+    const uint64_t key = plane_key(nt);
     if (sat.kind == 1) {
         const int face = int(tp.face_begin) + sat.index;
         for (int k = 0; k < 3; ++k) {
@@ -1170,7 +1182,10 @@ void add_separating_plane(const Model& model, const NearTri& nt, size_t piece, d
             at.object = nt.object;
             at.object_vertex = t[k];
             at.tool_face = static_cast<uint32_t>(face);
-            if (w.cand_count < kMaxAtoms) w.cand[w.cand_count++] = at;
+            if (w.cand_count < kMaxAtoms) {
+                w.cand_key[w.cand_count] = key;
+                w.cand[w.cand_count++] = at;
+            }
         }
         return;
     }
@@ -1189,7 +1204,10 @@ void add_separating_plane(const Model& model, const NearTri& nt, size_t piece, d
         at.object_vertex = t[vk];
         at.tool_vertex = tp.vertex_begin + static_cast<uint32_t>(a);
         at.axis = sat.axis;
-        if (w.cand_count < kMaxAtoms) w.cand[w.cand_count++] = at;
+        if (w.cand_count < kMaxAtoms) {
+            w.cand_key[w.cand_count] = key;
+            w.cand[w.cand_count++] = at;
+        }
     }
 }
 
@@ -1437,9 +1455,11 @@ void order_rows(const Model& model, Workspace& w, const ToolPoseAt& at, const do
     for (int i = 0; i < n; ++i) {
         w.order_atoms[i] = w.cand[w.order_index[i]];
         w.order_slots[i] = w.cand_slot[w.order_index[i]];
+        w.order_keys[i] = w.cand_key[w.order_index[i]];
     }
     std::copy(w.order_atoms, w.order_atoms + n, w.cand);
     std::copy(w.order_slots, w.order_slots + n, w.cand_slot);
+    std::copy(w.order_keys, w.order_keys + n, w.cand_key);
     w.warm.count = 0;
     for (int k = 0; k < warm_count; ++k)
         for (int i = 0; i < qp::kMaxRows; ++i)
@@ -1453,9 +1473,6 @@ void order_rows(const Model& model, Workspace& w, const ToolPoseAt& at, const do
 // projections over every axis (negative where they overlap), so the gap along any one axis bounds
 // it from below. The guard tries two such witnesses before the separating-axis test: the
 // triangle's normal and the axis the pair's last test found (kept by a hash of the pair).
-uint64_t sat_memo_key(const NearTri& nt) {
-    return ((uint64_t(nt.object) << 40) | (uint64_t(nt.tri) << 8) | nt.piece) + 1;
-}
 Workspace::SatMemo& sat_memo_slot(uint64_t key, Workspace& w) {
     return w.sat_memo[(key * 0x9E3779B97F4A7C15ull) >> (64 - Workspace::kSatMemoBits)];
 }
@@ -1469,7 +1486,7 @@ double separation_witness(const Model& model, const ConvexView& view, const Near
     int* extremes = w.gap_extremes[nt.piece];
     const double normal = gap_along_axis(view, obj.topology.triangle_normals[nt.tri], a, b, c, extremes);
     if (normal >= floor) return normal;
-    const uint64_t key = sat_memo_key(nt);
+    const uint64_t key = plane_key(nt);
     const Workspace::SatMemo& memo = sat_memo_slot(key, w);
     if (memo.key != key) return normal;
     return std::max(normal, gap_along_axis(view, memo.axis, a, b, c, extremes));
@@ -1481,7 +1498,7 @@ double separation_test(const Model& model, const ConvexView& view, const NearTri
     const auto& t = obj.mesh.triangles[nt.tri];
     const SatResult sat =
         separate_convex_triangle(view, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]);
-    const uint64_t key = sat_memo_key(nt);
+    const uint64_t key = plane_key(nt);
     Workspace::SatMemo& memo = sat_memo_slot(key, w);
     memo.key = key;
     memo.axis = sat.axis;
@@ -1710,7 +1727,10 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             const NearTri& nt = w.near[missed_tris[m]];
             const int first = w.cand_count;
             add_separating_plane(model, nt, nt.piece, reach, w);
-            for (int i = first; i < w.cand_count && w.plane_count < kMaxAtoms; ++i) w.planes[w.plane_count++] = w.cand[i];
+            for (int i = first; i < w.cand_count && w.plane_count < kMaxAtoms; ++i) {
+                w.planes_key[w.plane_count] = w.cand_key[i];
+                w.planes[w.plane_count++] = w.cand[i];
+            }
         }
         set_slack_vars();
         // Start again from the step's start with the added planes.
@@ -1742,6 +1762,33 @@ Vec3 contact_point(const Model& model, const Atom& a, const ToolPoseAt& t) {
     return t.p;
 }
 
+// The separating planes of the triangles whose planes held the tool at the last tick (those still
+// near), as the first of w.planes: the default candidate starts with them, and so every other.
+void carry_planes(const Model& model, const State& state, double reach, Workspace& w) {
+    // The carried pairs in a small open-addressed table, looked up once per near triangle (so the
+    // planes come in the near set's order).
+    constexpr int kBits = 8;
+    static_assert((1 << kBits) >= 2 * kMaxHeldPlanes, "the table keeps at least half its slots free");
+    uint64_t table[1 << kBits] = {};
+    auto slot = [](uint64_t key) { return int((key * 0x9E3779B97F4A7C15ull) >> (64 - kBits)); };
+    for (int i = 0; i < state.held_plane_count; ++i) {
+        int h = slot(state.held_planes[i]);
+        while (table[h] != 0 && table[h] != state.held_planes[i]) h = (h + 1) & ((1 << kBits) - 1);
+        table[h] = state.held_planes[i];
+    }
+    w.cand_count = 0;
+    for (int i = 0; i < w.near_count; ++i) {
+        if (!model.objects[w.near[i].object].compliant) continue;
+        const uint64_t key = plane_key(w.near[i]);
+        int h = slot(key);
+        while (table[h] != 0 && table[h] != key) h = (h + 1) & ((1 << kBits) - 1);
+        if (table[h] == key) add_separating_plane(model, w.near[i], w.near[i].piece, reach, w);
+    }
+    std::copy(w.cand, w.cand + w.cand_count, w.planes);
+    std::copy(w.cand_key, w.cand_key + w.cand_count, w.planes_key);
+    w.plane_count = w.cand_count;
+}
+
 // solve + select: every candidate set within the box; the feasible one of least energy wins
 // (ties keep the lower index, for determinism). Leaves the winner's atoms in w.best.
 //
@@ -1754,6 +1801,9 @@ Vec3 contact_point(const Model& model, const Atom& a, const ToolPoseAt& t) {
 // what the guard adds to it can only raise it. It cannot win, and is not solved. (Where the atoms
 // outnumber the QP's rows and the most binding are taken, the swap can also move the least binding
 // row out; that row held nothing in the cases measured.)
+//
+// The default set starts with the planes the last tick carried (carry_planes); where they leave
+// it no answer, it is solved again without them.
 bool solve_candidates(const Model& model, const Pose& base, const Mat3& frame, const double target[6],
                       const double target_local[6], const double lower[6], const double upper[6], double reach,
                       const State& state, Workspace& w, StepStats& stats, double x_out[6]) {
@@ -1764,19 +1814,33 @@ bool solve_candidates(const Model& model, const Pose& base, const Mat3& frame, c
     bool plain_default = false;
     bool holds[kMaxAtoms];
     w.plane_count = 0;
-    int shared_planes = 0;  // the default candidate's, w.planes[0, shared_planes)
+    if (model.settings.carry_planes && state.held_plane_count > 0) carry_planes(model, state, reach, w);
+    // The default candidate's, w.planes[0, shared_planes): the carried ones, then those its guard adds.
+    int shared_planes = w.plane_count;
     for (int c = 0; c < candidates; ++c) {
         if (c > 0 && plain_default && model.settings.skip_idle_candidates && !holds[w.alts[c - 1].replace]) continue;
         w.cand_count = w.atom_count;
         std::copy(w.atoms, w.atoms + w.atom_count, w.cand);
-        if (c > 0) {
-            w.cand[w.alts[c - 1].replace] = w.alts[c - 1].atom;
-            for (int i = 0; i < shared_planes && w.cand_count < kMaxAtoms; ++i) w.cand[w.cand_count++] = w.planes[i];
+        std::fill(w.cand_key, w.cand_key + w.atom_count, uint64_t(0));
+        if (c > 0) w.cand[w.alts[c - 1].replace] = w.alts[c - 1].atom;
+        for (int i = 0; i < shared_planes && w.cand_count < kMaxAtoms; ++i) {
+            w.cand_key[w.cand_count] = w.planes_key[i];
+            w.cand[w.cand_count++] = w.planes[i];
         }
-        const CandidateResult cr =
+        CandidateResult cr =
             solve_candidate(model, base, frame, target, target_local, lower, upper, reach, state.active,
                             state.active_count, w, stats);
         ++stats.candidates;
+        if (c == 0 && !cr.ok && shared_planes > 0) {
+            // The carried planes leave the default set no answer: it is solved as it comes.
+            w.plane_count = 0;
+            w.cand_count = w.atom_count;
+            std::copy(w.atoms, w.atoms + w.atom_count, w.cand);
+            std::fill(w.cand_key, w.cand_key + w.atom_count, uint64_t(0));
+            cr = solve_candidate(model, base, frame, target, target_local, lower, upper, reach, state.active,
+                                 state.active_count, w, stats);
+            ++stats.candidates;
+        }
         if (c == 0) shared_planes = w.plane_count;
         if (c == 0 && cr.ok && cr.from_start) {
             // The rows are the atoms and planes, in their order or (more of them than rows) the
@@ -1804,6 +1868,7 @@ bool solve_candidates(const Model& model, const Pose& base, const Mat3& frame, c
             w.best_count = w.cand_count;
             std::copy(w.cand, w.cand + w.cand_count, w.best);
             std::copy(w.cand_slot, w.cand_slot + w.cand_count, w.best_slot);
+            std::copy(w.cand_key, w.cand_key + w.cand_count, w.best_key);
             w.best_slacks = w.slacks;
             if (model.any_friction) w.best_friction = w.friction;
         }
@@ -2009,6 +2074,7 @@ bool apply_friction(const Model& model, const State& state, const Pose& base, co
               motion_local[3], true, 0.0, lower, upper);
     w.cand_count = w.best_count;
     std::copy(w.best, w.best + w.best_count, w.cand);
+    std::copy(w.best_key, w.best_key + w.best_count, w.cand_key);
     const CandidateResult cr = solve_candidate(model, base, frame, target, target_local, lower, upper, reach,
                                                state.active, state.active_count, w, stats);
     ++stats.candidates;
@@ -2017,6 +2083,7 @@ bool apply_friction(const Model& model, const State& state, const Pose& base, co
     w.best_count = w.cand_count;
     std::copy(w.cand, w.cand + w.cand_count, w.best);
     std::copy(w.cand_slot, w.cand_slot + w.cand_count, w.best_slot);
+    std::copy(w.cand_key, w.cand_key + w.cand_count, w.best_key);
     w.best_slacks = w.slacks;
     return true;
 }
@@ -2305,6 +2372,19 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             if (res.contacts == 0 && at_target) graphic = haptic;
             if (res.contacts > 0) res.status = StepStatus::Contact;
             else res.status = at_target ? StepStatus::Free : StepStatus::Partial;
+        }
+    }
+    // The planes of compliant triangles that hold the tool at its answer go on to the next tick.
+    state.held_plane_count = 0;
+    if (S.carry_planes && solved && !free_motion) {
+        const ToolPoseAt at = tool_pose_at(base, x_sol);
+        for (int i = 0; i < w.best_count && state.held_plane_count < kMaxHeldPlanes; ++i) {
+            if (w.best_key[i] == 0 || !model.objects[w.best[i].object].compliant ||
+                best_value(model, w, i, at) > S.contact_distance_m)
+                continue;
+            uint64_t* end = state.held_planes + state.held_plane_count;
+            if (std::find(state.held_planes, end, w.best_key[i]) == end)
+                state.held_planes[state.held_plane_count++] = w.best_key[i];
         }
     }
     const auto t_force = Clock::now();

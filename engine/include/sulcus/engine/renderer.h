@@ -68,6 +68,13 @@ struct RendererSettings {
     // energy (docs/renderer.md, solve). Off: every candidate is solved. Changes the step's cost,
     // not which candidate wins.
     bool skip_idle_candidates = true;
+    // Start each tick with the separating planes of the triangles whose planes held the tool at
+    // the last tick (State::held_planes), rather than finding those triangles again by a QP and
+    // a round of the guard: in the tissue the same few dozen gingiva triangles need planes tick
+    // after tick. Off: every tick's guard finds them anew. Changes the step's answers (a carried
+    // plane may hold the tool where a plane found anew would be found for a nearby triangle), not
+    // what they guarantee.
+    bool carry_planes = true;
     qp::Settings qp;
 };
 
@@ -249,6 +256,8 @@ struct Atom {
 };
 
 inline constexpr int kMaxActiveAtoms = 32;
+// Triangles whose separating planes a tick carries to the next (State::held_planes).
+inline constexpr int kMaxHeldPlanes = 64;
 
 enum class StepStatus : uint8_t {
     Free,     // no constraint active: the graphic tool is at the haptic pose
@@ -354,6 +363,10 @@ struct State {
     Pose last_haptic;
     SoftDepths soft;            // how deep the tool is in each compliant object at the last tick's solution
     bool sliding = false;       // friction: the tool slid (kinetic) at the last tick
+    // The (triangle, tool piece) pairs whose separating planes held the tool at the last tick's
+    // answer (RendererSettings::carry_planes), each as (object << 40 | triangle << 8 | piece) + 1.
+    int held_plane_count = 0;
+    uint64_t held_planes[kMaxHeldPlanes] = {};
     // Which session this is (distinct per make_state) and how many ticks it has stepped: the step
     // carries what it learnt from tick to tick (RendererSettings::near_cache) only along one
     // session's own ticks, so a session stepped again from its start repeats itself exactly.
