@@ -49,35 +49,8 @@ TriClosest closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
 
 SegmentClosest closest_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
     SegmentClosest r;
-    const Vec3 d1 = p1 - p0, d2 = q1 - q0, w = p0 - q0;
-    const double a = glm::dot(d1, d1), e = glm::dot(d2, d2), f = glm::dot(d2, w);
-    double s = 0.0, t = 0.0;
-    if (a <= 0.0 && e <= 0.0) {
-        s = t = 0.0;
-    } else if (a <= 0.0) {
-        t = std::clamp(f / e, 0.0, 1.0);
-    } else {
-        const double c = glm::dot(d1, w);
-        if (e <= 0.0) {
-            s = std::clamp(-c / a, 0.0, 1.0);
-        } else {
-            const double b = glm::dot(d1, d2);
-            const double denom = a * e - b * b;
-            // Near-parallel segments: any s works; take the start and clamp.
-            s = denom > 1e-14 * a * e ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
-            t = (b * s + f) / e;
-            if (t < 0.0) {
-                t = 0.0;
-                s = std::clamp(-c / a, 0.0, 1.0);
-            } else if (t > 1.0) {
-                t = 1.0;
-                s = std::clamp((b - c) / a, 0.0, 1.0);
-            }
-        }
-    }
-    r.s = s;
-    r.t = t;
-    r.distance = glm::length((p0 + s * d1) - (q0 + t * d2));
+    closest_segment_params(p0, p1, q0, q1, r.s, r.t);
+    r.distance = glm::length((p0 + r.s * (p1 - p0)) - (q0 + r.t * (q1 - q0)));
     return r;
 }
 

@@ -2,6 +2,8 @@
 // distances, and separating-axis tests between the convex tool and one triangle.
 #pragma once
 
+#include <algorithm>
+
 #include "sulcus/engine/types.h"
 
 namespace sulcus {
@@ -23,6 +25,38 @@ struct SegmentClosest {
     double s = 0.0, t = 0.0;  // parameters on [p0,p1] and [q0,q1]
     double distance = 0.0;
 };
+
+// The parameters s on [p0,p1] and t on [q0,q1] of the closest points of the two segments
+// (parallel segments handled), without their distance.
+inline void closest_segment_params(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, double& s,
+                                   double& t) {
+    const Vec3 d1 = p1 - p0, d2 = q1 - q0, w = p0 - q0;
+    const double a = glm::dot(d1, d1), e = glm::dot(d2, d2), f = glm::dot(d2, w);
+    s = 0.0;
+    t = 0.0;
+    if (a <= 0.0 && e <= 0.0) return;
+    if (a <= 0.0) {
+        t = std::clamp(f / e, 0.0, 1.0);
+        return;
+    }
+    const double c = glm::dot(d1, w);
+    if (e <= 0.0) {
+        s = std::clamp(-c / a, 0.0, 1.0);
+        return;
+    }
+    const double b = glm::dot(d1, d2);
+    const double denom = a * e - b * b;
+    // Near-parallel segments: any s works; take the start and clamp.
+    s = denom > 1e-14 * a * e ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+    t = (b * s + f) / e;
+    if (t < 0.0) {
+        t = 0.0;
+        s = std::clamp(-c / a, 0.0, 1.0);
+    } else if (t > 1.0) {
+        t = 1.0;
+        s = std::clamp((b - c) / a, 0.0, 1.0);
+    }
+}
 
 // Closest points of segments [p0,p1] and [q0,q1] (parallel segments handled).
 SegmentClosest closest_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1);

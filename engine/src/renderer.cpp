@@ -209,6 +209,10 @@ struct Workspace {
     bool gather_full = false;  // an atom or feature of this gather did not fit
     Inside inside[kMaxFeatures];
     int inside_count = 0;
+    // The same in key order (by tool vertex, then object and feature), and where each tool
+    // vertex's run begins in it.
+    Inside inside_sorted[kMaxFeatures];
+    int inside_first[kMaxToolVertices + 1];
     ObjFeature overts[kMaxObjFeatures];
     int overt_count = 0;
     ObjFeature oedges[kMaxObjFeatures];
@@ -827,7 +831,8 @@ bool in_vertex_cone(const ModelObject& obj, uint32_t v, const Vec3& p) {
 bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3& push, Workspace& w) {
     const ModelTool& tool = model.tool;
     const SoftDepths& soft = w.soft;
-    const Quat base_inv = glm::conjugate(base.orientation);
+    // World to the tool's frame (rotation part), for the E-E boxes.
+    const Mat3 to_tool = glm::mat3_cast(glm::conjugate(base.orientation));
     auto in_of = [&](uint16_t o) { return model.objects[o].compliant ? soft.of(o) + reach : 0.0; };
     auto back_of = [&](uint16_t o) { return kBackFace + in_of(o); };
     auto reach_of = [&](uint16_t o) { return reach + in_of(o); };
@@ -922,37 +927,44 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         // by one face: the one facing the way the object pushes back (the force of the last
         // tick), so that a face it happens to be near -- the far side of a corner, an inner face
         // against a neighbouring object -- does not hold it; without a force, the nearest.
-        std::sort(w.inside, w.inside + w.inside_count, [](const Inside& x, const Inside& y) {
-            if (x.key.a != y.key.a) return x.key.a < y.key.a;
-            if (x.key.object != y.key.object) return x.key.object < y.key.object;
-            return x.key < y.key;
-        });
+        // In key order: placed by tool vertex (a count per vertex), then each vertex's few
+        // entries sorted in place.
+        const int nv = int(tool.mesh.vertices.size());
+        std::fill(w.inside_first, w.inside_first + nv + 1, 0);
+        for (int i = 0; i < w.inside_count; ++i) ++w.inside_first[w.inside[i].key.a + 1];
+        for (int a = 0; a < nv; ++a) w.inside_first[a + 1] += w.inside_first[a];
+        for (int i = 0; i < w.inside_count; ++i) w.inside_sorted[w.inside_first[w.inside[i].key.a]++] = w.inside[i];
+        Inside* const in = w.inside_sorted;
+        for (int a = nv; a > 0; --a) w.inside_first[a] = w.inside_first[a - 1];
+        w.inside_first[0] = 0;
+        for (int a = 0; a < nv; ++a)
+            for (int i = w.inside_first[a] + 1; i < w.inside_first[a + 1]; ++i)
+                for (int k = i; k > w.inside_first[a] && in[k].key < in[k - 1].key; --k) std::swap(in[k], in[k - 1]);
         const bool pushed = glm::dot(push, push) > 0.0;
         int i = 0;
         while (i < w.inside_count) {
             int j = i;
             bool inside = false;
-            while (j < w.inside_count && w.inside[j].key.a == w.inside[i].key.a &&
-                   w.inside[j].key.object == w.inside[i].key.object)
-                inside |= w.inside[j++].behind;
+            while (j < w.inside_count && in[j].key.a == in[i].key.a && in[j].key.object == in[i].key.object)
+                inside |= in[j++].behind;
             if (!inside) {
                 for (int k = i; k < j; ++k)
-                    if (w.feat_count < kMaxFeatures) w.feats[w.feat_count++] = w.inside[k].key;
+                    if (w.feat_count < kMaxFeatures) w.feats[w.feat_count++] = in[k].key;
                     else w.gather_full = true;
             } else {
                 int best = -1;
                 for (int k = i; k < j; ++k) {
-                    const Inside& c = w.inside[k];
+                    const Inside& c = in[k];
                     if (c.key.type != 0 || c.plane > kBackFace) continue;
                     if (best < 0) {
                         best = k;
                         continue;
                     }
-                    const Inside& b = w.inside[best];
+                    const Inside& b = in[best];
                     const bool better = pushed && c.facing != b.facing ? c.facing > b.facing : c.plane > b.plane;
                     if (better) best = k;
                 }
-                if (best >= 0 && w.feat_count < kMaxFeatures) w.feats[w.feat_count++] = w.inside[best].key;
+                if (best >= 0 && w.feat_count < kMaxFeatures) w.feats[w.feat_count++] = in[best].key;
                 else if (best >= 0) w.gather_full = true;
             }
             i = j;
@@ -1099,8 +1111,8 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         // The tool edges whose boxes come within reach of the object edge's, in the tool's frame
         // (with room for the rounding of the move into it), in their order.
         Aabb local;
-        local.grow(base_inv * (v0 - base.position));
-        local.grow(base_inv * (v1 - base.position));
+        local.grow(to_tool * (v0 - base.position));
+        local.grow(to_tool * (v1 - base.position));
         const double far = reach_of(feature_object(w.oedges[i]));
         local.inflate(far + 1e-12);
         int hits = 0;
@@ -1122,9 +1134,11 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             const double along = ee > 0.0 ? std::clamp(glm::dot(off, et) / ee, 0.0, 1.0) : 0.0;
             const Vec3 gap = off - along * et;
             if (glm::dot(gap, gap) > near_o * near_o) continue;
-            const SegmentClosest sc = closest_segments(a0, a1, v0, v1);
-            if (sc.distance > far) continue;
-            if (sc.s <= 1e-9 || sc.s >= 1.0 - 1e-9 || sc.t <= 1e-9 || sc.t >= 1.0 - 1e-9) continue;
+            // Closest points at an end of either edge (most pairs): a vertex's atom, not this one.
+            double s, t;
+            closest_segment_params(a0, a1, v0, v1, s, t);
+            if (s <= 1e-9 || s >= 1.0 - 1e-9 || t <= 1e-9 || t >= 1.0 - 1e-9) continue;
+            if (glm::length((a0 + s * et) - (v0 + t * eo)) > far) continue;
             const Vec3 u = glm::cross(eo, et);
             const double ul = glm::length(u);
             // Near-parallel edges: the plane of eq. 7 is undefined; the vertices' atoms hold.
