@@ -51,10 +51,20 @@ namespace {
 
 using test_sat::PlacedTool;
 
+// A triangle near the placed tool: around one of its vertices, vertices up to 0.05-1.05 `scale`
+// off it along each axis.
+void triangle_near_vertex(const PlacedTool& pt, std::mt19937& rng, std::uniform_real_distribution<double>& u,
+                          double scale, Vec3& a, Vec3& b, Vec3& d) {
+    const Vec3 c = pt.verts[size_t(rng() % pt.verts.size())];
+    const double s = scale * (0.05 + 0.5 * (u(rng) + 1.0));
+    a = c + s * Vec3(u(rng), u(rng), u(rng));
+    b = c + s * Vec3(u(rng), u(rng), u(rng));
+    d = c + s * Vec3(u(rng), u(rng), u(rng));
+}
+
 void compare_on(const TriMesh& tool_mesh, double scale, int trials, unsigned seed) {
     PlacedTool pt(tool_mesh);
     ASSERT_TRUE(pt.mb.model) << pt.mb.error;
-    const std::vector<Vec3>& verts = pt.verts;
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     int overlapping = 0, separated = 0;
@@ -63,11 +73,8 @@ void compare_on(const TriMesh& tool_mesh, double scale, int trials, unsigned see
         pt.place(q, Vec3(u(rng) * scale * 0.2, u(rng) * scale * 0.2, u(rng) * scale * 0.2));
         const ConvexView slow = pt.view(false);
         const ConvexView fast = pt.view(true);
-        // A triangle near the tool: around a random tool vertex.
-        const Vec3 c = verts[size_t(rng() % verts.size())];
-        const double s = scale * (0.05 + 0.5 * (u(rng) + 1.0));
-        const Vec3 a = c + s * Vec3(u(rng), u(rng), u(rng)), b = c + s * Vec3(u(rng), u(rng), u(rng)),
-                   d = c + s * Vec3(u(rng), u(rng), u(rng));
+        Vec3 a, b, d;
+        triangle_near_vertex(pt, rng, u, scale, a, b, d);
         const SatResult rs = separate_convex_triangle(slow, a, b, d);
         const SatResult rf = separate_convex_triangle(fast, a, b, d);
         ASSERT_EQ(rs.separation > 0.0, rf.separation > 0.0) << "trial " << t;
@@ -104,10 +111,8 @@ TEST(SeparatingAxis, NoGapAlongAnAxisExceedsTheSeparation) {
     for (int t = 0; t < 3000; ++t) {
         pt.place(glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng))), Vec3(u(rng), u(rng), u(rng)) * 0.2 * scale);
         const ConvexView view = pt.view(true);
-        const Vec3 c = pt.verts[size_t(rng() % pt.verts.size())];
-        const double s = scale * (0.05 + 0.5 * (u(rng) + 1.0));
-        const Vec3 a = c + s * Vec3(u(rng), u(rng), u(rng)), b = c + s * Vec3(u(rng), u(rng), u(rng)),
-                   d = c + s * Vec3(u(rng), u(rng), u(rng));
+        Vec3 a, b, d;
+        triangle_near_vertex(pt, rng, u, scale, a, b, d);
         const SatResult sat = separate_convex_triangle(view, a, b, d);
         overlapping += sat.separation < 0.0;
         const Vec3 n = glm::normalize(glm::cross(b - a, d - a));
@@ -145,10 +150,8 @@ TEST(SeparatingAxis, GapAlongAnAxisByDescentIsTheScans) {
         axis = t % 7 == 0 ? glm::normalize(Vec3(u(rng), u(rng), u(rng)))
                           : glm::normalize(axis + 0.05 * Vec3(u(rng), u(rng), u(rng)));
         if (t % 500 == 0) extremes[0] = -5;  // a start out of range: the scan
-        const Vec3 c = pt.verts[size_t(rng() % pt.verts.size())];
-        const double s = scale * (0.05 + 0.5 * (u(rng) + 1.0));
-        const Vec3 a = c + s * Vec3(u(rng), u(rng), u(rng)), b = c + s * Vec3(u(rng), u(rng), u(rng)),
-                   d = c + s * Vec3(u(rng), u(rng), u(rng));
+        Vec3 a, b, d;
+        triangle_near_vertex(pt, rng, u, scale, a, b, d);
         const int before = extremes[0];
         EXPECT_EQ(gap_along_axis(view, axis, a, b, d, extremes), gap_along_axis(view, axis, a, b, d)) << "trial " << t;
         moved += extremes[0] != before;

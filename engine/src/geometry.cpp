@@ -56,8 +56,19 @@ SegmentClosest closest_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, 
 
 namespace {
 
-// Separation along unit axis n with the polytope on the positive side: min over the polytope
-// minus max over the triangle; also the other orientation. Returns the larger, with its sign.
+// The gap along unit axis n between a polytope spanning [pmin, pmax] along it and triangle
+// (a, b, c): with the polytope on the positive side, its min minus the triangle's max; also the
+// other orientation. Returns the larger, `sign` +1 for the first.
+inline double extent_gap(double pmin, double pmax, const Vec3& n, const Vec3& a, const Vec3& b, const Vec3& c,
+                         double& sign) {
+    const double ta = glm::dot(n, a), tb = glm::dot(n, b), tc = glm::dot(n, c);
+    const double tmin = std::min(ta, std::min(tb, tc)), tmax = std::max(ta, std::max(tb, tc));
+    const double pos = pmin - tmax, neg = tmin - pmax;
+    sign = pos >= neg ? 1.0 : -1.0;
+    return std::max(pos, neg);
+}
+
+// Separation along unit axis n (extent_gap), the polytope's extent by looking at every vertex.
 inline double axis_separation(const ConvexView& poly, const Vec3& n, const Vec3& a, const Vec3& b, const Vec3& c,
                               double& sign) {
     double pmin = 1e300, pmax = -1e300;
@@ -66,11 +77,7 @@ inline double axis_separation(const ConvexView& poly, const Vec3& n, const Vec3&
         pmin = std::min(pmin, v);
         pmax = std::max(pmax, v);
     }
-    const double ta = glm::dot(n, a), tb = glm::dot(n, b), tc = glm::dot(n, c);
-    const double tmin = std::min(ta, std::min(tb, tc)), tmax = std::max(ta, std::max(tb, tc));
-    const double pos = pmin - tmax, neg = tmin - pmax;
-    sign = pos >= neg ? 1.0 : -1.0;
-    return std::max(pos, neg);
+    return extent_gap(pmin, pmax, n, a, b, c, sign);
 }
 
 }  // namespace
@@ -87,10 +94,9 @@ double gap_along_axis(const ConvexView& poly, const Vec3& n, const Vec3& a, cons
                               poly.start_of, n, extremes[0]);
     extremes[1] = least_along(poly.vertices, poly.vertex_count, poly.neighbour_offsets, poly.neighbours,
                               poly.start_of, -n, extremes[1]);
-    const double pmin = glm::dot(n, poly.vertices[extremes[0]]), pmax = glm::dot(n, poly.vertices[extremes[1]]);
-    const double ta = glm::dot(n, a), tb = glm::dot(n, b), tc = glm::dot(n, c);
-    const double tmin = std::min(ta, std::min(tb, tc)), tmax = std::max(ta, std::max(tb, tc));
-    return std::max(pmin - tmax, tmin - pmax);
+    double sign = 1.0;
+    return extent_gap(glm::dot(n, poly.vertices[extremes[0]]), glm::dot(n, poly.vertices[extremes[1]]), n, a, b, c,
+                      sign);
 }
 
 bool vertex_deep_inside(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c, double floor,
@@ -135,10 +141,9 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
         }
         // The polytope spans [offset - depth, offset] along its own face normal.
         const Vec3& n = poly.normals[f];
-        const double pmax = poly.offsets[f], pmin = pmax - poly.depths[f];
-        const double ta = glm::dot(n, a), tb = glm::dot(n, b), tc = glm::dot(n, c);
-        const double pos = pmin - std::max(ta, std::max(tb, tc)), neg = std::min(ta, std::min(tb, tc)) - pmax;
-        keep(std::max(pos, neg), pos >= neg ? 1.0 : -1.0, n, 1, f);
+        double sign = 1.0;
+        const double s = extent_gap(poly.offsets[f] - poly.depths[f], poly.offsets[f], n, a, b, c, sign);
+        keep(s, sign, n, 1, f);
     }
     const Vec3 te[3] = {b - a, c - b, a - c};
     // Edge pairs: only those that form a face of the Minkowski difference can be the separating

@@ -41,6 +41,10 @@ inline int radix_sort_unique(uint64_t* keys, uint64_t* scratch, int count) {
     return n;
 }
 
+// The slot of `key` in a table of 2^bits slots (Fibonacci hashing: the top bits of the key times
+// the golden ratio's 64-bit fraction).
+inline uint32_t hash_slot(uint64_t key, int bits) { return uint32_t((key * 0x9E3779B97F4A7C15ull) >> (64 - bits)); }
+
 // Slots of an open-addressing table that drops repeats before a sort. Each slot carries the
 // stamp of the call that filled it, so a call never clears the table; a call uses only the
 // first 2^k slots, k just enough for half of them to stay empty, so that a few hundred keys touch
@@ -69,7 +73,7 @@ inline int sort_unique(uint64_t* keys, uint64_t* scratch, int count, DedupeTable
     int n = 0;
     for (int i = 0; i < count; ++i) {
         const uint64_t k = keys[i];
-        uint32_t h = uint32_t((k * 0x9E3779B97F4A7C15ull) >> (64 - bits));
+        uint32_t h = hash_slot(k, bits);
         bool seen = false;
         while (table.stamp[h] == table.now) {
             if (table.key[h] == k) {

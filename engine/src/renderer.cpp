@@ -1488,7 +1488,7 @@ void order_rows(const Model& model, Workspace& w, const ToolPoseAt& at, const do
 // it from below. The guard tries two such witnesses before the separating-axis test: the
 // triangle's normal and the axis the pair's last test found (kept by a hash of the pair).
 Workspace::SatMemo& sat_memo_slot(uint64_t key, Workspace& w) {
-    return w.sat_memo[(key * 0x9E3779B97F4A7C15ull) >> (64 - Workspace::kSatMemoBits)];
+    return w.sat_memo[hash_slot(key, Workspace::kSatMemoBits)];
 }
 
 // The larger of the two witnesses' gaps, the second only where the first falls short of `floor`.
@@ -1784,19 +1784,18 @@ void carry_planes(const Model& model, const State& state, double reach, Workspac
     constexpr int kBits = 8;
     static_assert((1 << kBits) >= 2 * kMaxHeldPlanes, "the table keeps at least half its slots free");
     uint64_t table[1 << kBits] = {};
-    auto slot = [](uint64_t key) { return int((key * 0x9E3779B97F4A7C15ull) >> (64 - kBits)); };
-    for (int i = 0; i < state.held_plane_count; ++i) {
-        int h = slot(state.held_planes[i]);
-        while (table[h] != 0 && table[h] != state.held_planes[i]) h = (h + 1) & ((1 << kBits) - 1);
-        table[h] = state.held_planes[i];
-    }
+    // The key's slot, or the empty one where it would go.
+    auto slot = [&](uint64_t key) {
+        uint32_t h = hash_slot(key, kBits);
+        while (table[h] != 0 && table[h] != key) h = (h + 1) & ((1u << kBits) - 1);
+        return h;
+    };
+    for (int i = 0; i < state.held_plane_count; ++i) table[slot(state.held_planes[i])] = state.held_planes[i];
     w.cand_count = 0;
     for (int i = 0; i < w.near_count; ++i) {
         if (!model.objects[w.near[i].object].compliant) continue;
         const uint64_t key = plane_key(w.near[i]);
-        int h = slot(key);
-        while (table[h] != 0 && table[h] != key) h = (h + 1) & ((1 << kBits) - 1);
-        if (table[h] == key) add_separating_plane(model, w.near[i], w.near[i].piece, reach, w);
+        if (table[slot(key)] == key) add_separating_plane(model, w.near[i], w.near[i].piece, reach, w);
     }
     std::copy(w.cand, w.cand + w.cand_count, w.planes);
     std::copy(w.cand_key, w.cand_key + w.cand_count, w.planes_key);
@@ -1831,29 +1830,28 @@ bool solve_candidates(const Model& model, const Pose& base, const Mat3& frame, c
     if (model.settings.carry_planes && state.held_plane_count > 0) carry_planes(model, state, reach, w);
     // The default candidate's, w.planes[0, shared_planes): the carried ones, then those its guard adds.
     int shared_planes = w.plane_count;
-    for (int c = 0; c < candidates; ++c) {
-        if (c > 0 && plain_default && model.settings.skip_idle_candidates && !holds[w.alts[c - 1].replace]) continue;
+    // Candidate c: the default set's atoms (after the first, one swapped for its alternative),
+    // then the first `planes` of w.planes.
+    auto solve = [&](int c, int planes) {
         w.cand_count = w.atom_count;
         std::copy(w.atoms, w.atoms + w.atom_count, w.cand);
         std::fill(w.cand_key, w.cand_key + w.atom_count, uint64_t(0));
         if (c > 0) w.cand[w.alts[c - 1].replace] = w.alts[c - 1].atom;
-        for (int i = 0; i < shared_planes && w.cand_count < kMaxAtoms; ++i) {
+        for (int i = 0; i < planes && w.cand_count < kMaxAtoms; ++i) {
             w.cand_key[w.cand_count] = w.planes_key[i];
             w.cand[w.cand_count++] = w.planes[i];
         }
-        CandidateResult cr =
-            solve_candidate(model, base, frame, target, target_local, lower, upper, reach, state.active,
-                            state.active_count, w, stats);
         ++stats.candidates;
+        return solve_candidate(model, base, frame, target, target_local, lower, upper, reach, state.active,
+                               state.active_count, w, stats);
+    };
+    for (int c = 0; c < candidates; ++c) {
+        if (c > 0 && plain_default && model.settings.skip_idle_candidates && !holds[w.alts[c - 1].replace]) continue;
+        CandidateResult cr = solve(c, shared_planes);
         if (c == 0 && !cr.ok && shared_planes > 0) {
             // The carried planes leave the default set no answer: it is solved as it comes.
             w.plane_count = 0;
-            w.cand_count = w.atom_count;
-            std::copy(w.atoms, w.atoms + w.atom_count, w.cand);
-            std::fill(w.cand_key, w.cand_key + w.atom_count, uint64_t(0));
-            cr = solve_candidate(model, base, frame, target, target_local, lower, upper, reach, state.active,
-                                 state.active_count, w, stats);
-            ++stats.candidates;
+            cr = solve(0, 0);
         }
         if (c == 0) shared_planes = w.plane_count;
         if (c == 0 && cr.ok && cr.from_start) {
