@@ -213,3 +213,192 @@ TEST(BoxMotionBound, LargeTurnsGiveNoBound) {
     const double lower[6] = {0, 0, 0, -0.2, 0, 0}, upper[6] = {0, 0, 0, 0.2, 0, 0};
     EXPECT_TRUE(std::isinf(box_motion_bound(0.01, from, at, Mat3(1.0), lower, upper)));
 }
+
+namespace {
+
+// A probe-like piece for the per-triangle bounds: a bent line of segments from the tool's origin
+// (its tip end) 12 mm up, in the tool frame. Every point of it is a point of the piece, so the
+// bounds, which hold for any set of points, hold for it.
+struct Polyline {
+    std::vector<Vec3> points;
+    double radius = 0.0;  // furthest point from the origin
+};
+
+Polyline probe_line(std::mt19937& rng) {
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Polyline p;
+    for (int i = 0; i <= 6; ++i) {
+        const double y = 0.002 * i;
+        p.points.push_back(i == 0 ? Vec3(0.0) : Vec3(2e-4 * u(rng), y, 2e-4 * u(rng)));
+        p.radius = std::max(p.radius, glm::length(p.points.back()));
+    }
+    return p;
+}
+
+double polyline_distance(const Polyline& line, const Pose& pose, const Vec3& a, const Vec3& b, const Vec3& c) {
+    double d = 1e300;
+    for (size_t i = 0; i + 1 < line.points.size(); ++i)
+        d = std::min(d, segment_triangle_distance(pose.position + pose.orientation * line.points[i],
+                                                  pose.position + pose.orientation * line.points[i + 1], a, b, c));
+    return d;
+}
+
+// A small triangle (about 0.1 mm, as on a dense tooth mesh) round a point.
+void small_triangle(std::mt19937& rng, const Vec3& at, Vec3& a, Vec3& b, Vec3& c) {
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    a = at + 5e-5 * Vec3(u(rng), u(rng), u(rng));
+    b = at + 5e-5 * Vec3(u(rng), u(rng), u(rng));
+    c = at + 5e-5 * Vec3(u(rng), u(rng), u(rng));
+}
+
+}  // namespace
+
+// triangle_motion: a triangle's distance from the piece changes by no more than the bound from
+// the distance at the earlier pose and the triangle's reach from the origin now, for motions of
+// a tick or a few; near the origin it is far below the piece's own bound (its centre's
+// displacement plus the turn times its spread), which is what lets the near cache settle the
+// triangles at a probe's tip without measuring them.
+TEST(TriangleMotion, BoundsHowFarATrianglesDistanceMoves) {
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const Polyline line = probe_line(rng);
+    ToolPiece piece;  // for motion_bound: the line's box centre and spread
+    Vec3 lo(1e300), hi(-1e300);
+    for (const Vec3& p : line.points) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    piece.centre = 0.5 * (lo + hi);
+    for (const Vec3& p : line.points) piece.spread_m = std::max(piece.spread_m, glm::length(p - piece.centre));
+    double worst = 0.0;
+    int near_origin = 0, tighter = 0, turning = 0, halved = 0;
+    for (int trial = 0; trial < 4000; ++trial) {
+        Pose from;
+        from.position = 0.01 * Vec3(u(rng), u(rng), u(rng));
+        from.orientation = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+        Pose to;
+        const double move = trial % 4 == 0 ? 0.0 : 5e-5 * (u(rng) + 1.0);
+        to.position = from.position + move * glm::normalize(Vec3(u(rng), u(rng), u(rng)));
+        to.orientation = glm::normalize(quat_exp(5e-3 * (u(rng) + 1.0) * glm::normalize(Vec3(u(rng), u(rng), u(rng)))) *
+                                        from.orientation);
+        // A triangle beside the line at the earlier pose, up to 0.3 mm off it.
+        const Vec3 on = from.position + from.orientation * glm::mix(line.points[0], line.points.back(), 0.5 * (u(rng) + 1.0));
+        Vec3 a, b, c;
+        small_triangle(rng, on + 3e-4 * Vec3(u(rng), u(rng), u(rng)), a, b, c);
+        const double d1 = polyline_distance(line, from, a, b, c), d2 = polyline_distance(line, to, a, b, c);
+        const double rho = std::sqrt(std::max({glm::dot(a - to.position, a - to.position),
+                                               glm::dot(b - to.position, b - to.position),
+                                               glm::dot(c - to.position, c - to.position)}));
+        const double bound = triangle_motion(origin_motion(from, to), d1, rho);
+        ASSERT_LE(std::abs(d2 - d1), bound) << "trial " << trial;
+        worst = std::max(worst, std::abs(d2 - d1) / bound);
+        if (rho < 1.5e-3) {
+            ++near_origin;
+            const double piece_bound = motion_bound(piece, from, to);
+            tighter += bound < piece_bound;
+            if (move == 0.0) {
+                ++turning;
+                halved += bound < 0.5 * piece_bound;
+            }
+        }
+    }
+    EXPECT_GT(worst, 0.5);  // not loose everywhere
+    ASSERT_GT(near_origin, 200);
+    // Near the tip, below the piece's bound but where the turn takes the piece's centre back
+    // against the move (the piece's bound then counts the smaller displacement).
+    EXPECT_GT(tighter, near_origin * 9 / 10);
+    ASSERT_GT(turning, 50);
+    EXPECT_EQ(halved, turning);  // and where the tool only turns, under half of it
+}
+
+// PieceReach::of: a triangle further than its reach from the piece at the box's base stays out of
+// the contact distance at every pose of the box (its corners and poses inside), for boxes that
+// move and turn as the step's force-continuity boxes do; and near the origin that reach is well
+// inside the piece's reach, so such triangles exist.
+TEST(PieceReach, ATriangleBeyondItsReachStaysOutOfContactOverTheBox) {
+    std::mt19937 rng(29);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const Polyline line = probe_line(rng);
+    RendererSettings S;
+    int beyond = 0, only_by_triangle = 0;
+    for (int trial = 0; trial < 1500; ++trial) {
+        Pose base;
+        base.position = 0.01 * Vec3(u(rng), u(rng), u(rng));
+        base.orientation = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+        double lower[6], upper[6];
+        for (int j = 0; j < 6; ++j) {
+            const double s = j < 3 ? 2e-5 : 2e-3;
+            lower[j] = -s * 0.5 * (u(rng) + 1.0);
+            upper[j] = s * 0.5 * (u(rng) + 1.0);
+        }
+        const PieceReach pr = piece_reach(S, line.radius, base.position, lower, upper);
+        const Vec3 on = base.position + base.orientation * glm::mix(line.points[0], line.points.back(), 0.5 * (u(rng) + 1.0));
+        Vec3 a, b, c;
+        small_triangle(rng, on + 8e-5 * Vec3(u(rng), u(rng), u(rng)), a, b, c);
+        const double d = polyline_distance(line, base, a, b, c), reach = pr.of(pr.rho(a, b, c));
+        ASSERT_LE(reach, pr.reach);
+        if (!(d > reach)) continue;
+        ++beyond;
+        only_by_triangle += d <= pr.reach;
+        for (int i = 0; i < 200; ++i) {
+            double x[6];
+            for (int j = 0; j < 6; ++j) {
+                const double f = i < 64 ? double((i >> j) & 1) : 0.5 * (u(rng) + 1.0);
+                x[j] = lower[j] + f * (upper[j] - lower[j]);
+            }
+            Pose at;
+            at.position = base.position + Vec3(x[0], x[1], x[2]);
+            at.orientation = glm::normalize(quat_exp(Vec3(x[3], x[4], x[5])) * base.orientation);
+            ASSERT_GT(polyline_distance(line, at, a, b, c), S.contact_distance_m) << "trial " << trial << " pose " << i;
+        }
+    }
+    EXPECT_GT(beyond, 300);
+    EXPECT_GT(only_by_triangle, 50);  // beyond their own reach though within the piece's
+}
+
+// PieceReach::of, at its edge: a small triangle put where a corner of the box brings a point of
+// the piece (within the contact distance of it there) is within its reach of the piece at the
+// base, for points all along a probe's length; and the reach is not loose, some such triangles
+// lying over three quarters of the way out to it.
+TEST(PieceReach, ATriangleTheBoxBringsIntoContactIsInReach) {
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const Polyline line = probe_line(rng);
+    RendererSettings S;
+    int tight = 0, trials = 0;
+    for (int trial = 0; trial < 3000; ++trial) {
+        Pose base;
+        base.position = 0.01 * Vec3(u(rng), u(rng), u(rng));
+        base.orientation = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+        double lower[6], upper[6], x[6];
+        for (int j = 0; j < 6; ++j) {
+            const double s = j < 3 ? 2e-5 : 2e-3;
+            lower[j] = -s * 0.5 * (u(rng) + 1.0);
+            upper[j] = s * 0.5 * (u(rng) + 1.0);
+            x[j] = (trial >> j) & 1 ? upper[j] : lower[j];
+        }
+        const PieceReach pr = piece_reach(S, line.radius, base.position, lower, upper);
+        Pose at;
+        at.position = base.position + Vec3(x[0], x[1], x[2]);
+        at.orientation = glm::normalize(quat_exp(Vec3(x[3], x[4], x[5])) * base.orientation);
+        // A point of the piece, where it is at the base and at the corner.
+        const size_t i = size_t(trial) % (line.points.size() - 1);
+        const Vec3 local = glm::mix(line.points[i], line.points[i + 1], 0.5 * (u(rng) + 1.0));
+        const Vec3 p0 = base.position + base.orientation * local, p1 = at.position + at.orientation * local;
+        const Vec3 way = p1 - p0;
+        if (!(glm::length(way) > 0.0)) continue;
+        // A triangle a micrometre across just ahead of the point at the corner, facing the way.
+        const Vec3 n = glm::normalize(way);
+        const Vec3 e1 = glm::normalize(glm::cross(n, std::abs(n.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0)));
+        const Vec3 e2 = glm::cross(n, e1);
+        const Vec3 c = p1 + 0.5 * S.contact_distance_m * n;
+        const Vec3 a = c + 5e-7 * e1, b = c - 2.5e-7 * e1 + 4e-7 * e2, d = c - 2.5e-7 * e1 - 4e-7 * e2;
+        ASSERT_LE(polyline_distance(line, at, a, b, d), S.contact_distance_m) << "trial " << trial;
+        const double gap = polyline_distance(line, base, a, b, d), reach = pr.of(pr.rho(a, b, d));
+        ++trials;
+        ASSERT_LE(gap, reach) << "trial " << trial << ": the corner brings it into contact";
+        tight += gap > 0.75 * reach;
+    }
+    EXPECT_GT(trials, 2500);
+    EXPECT_GT(tight, 10);
+}

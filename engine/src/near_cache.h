@@ -94,6 +94,11 @@ struct NearCache {
     // the ring still has a bound, and entries far out of reach need no look until the path has
     // grown by their distance.
     double path_m[kMaxToolPieces] = {};
+    // Per slot, how far the tool's origin moved and how far the tool turned from the slot's pose
+    // to the current one, worked out once per current pose (origin_motion).
+    double origin_move_m[kNearCacheSlots] = {};
+    double origin_turn[kNearCacheSlots] = {};
+    uint64_t origin_for[kNearCacheSlots] = {};
     PieceNearCache piece[kMaxToolPieces];
     NearCacheEntry previous[kNearCacheEntries];  // a superset being replaced
     int32_t table[kNearCacheHash];               // (object, triangle) -> index in `previous`
@@ -108,14 +113,19 @@ inline double motion_bound(const ToolPiece& piece, const Pose& from, const Pose&
     return glm::length(b - a) + turn * piece.spread_m + 1e-12 + 1e-13 * (glm::length(b) + piece.spread_m);
 }
 
-// How far no point within `radius` of the tool's origin moves from pose `from` to any pose of the
+// How far the tool's origin moves, and how far it turns, from pose `from` to any pose of the
 // step's box [lower, upper] about pose `at` (coordinates in `frame`: a pose x of the box is
-// at.position + frame x[0..2], Exp(frame x[3..5]) at.orientation). Each such pose is a motion from
-// `from` too: by the box shifted by the way from there, since a turn composed with a turn differs
-// from their sum by less than the product of their angles, for turns this small. +infinity for
-// turns over 0.1 rad.
-inline double box_motion_bound(double radius, const Pose& from, const Pose& at, const Mat3& frame,
-                               const double lower[6], const double upper[6]) {
+// at.position + frame x[0..2], Exp(frame x[3..5]) at.orientation), with room for the rounding:
+// so no point within r of the origin at `from` moves further than move_m + turn * r. Each such
+// pose is a motion from `from` too: by the box shifted by the way from there, since a turn
+// composed with a turn differs from their sum by less than the product of their angles, for
+// turns this small. Both +infinity for turns over 0.1 rad.
+struct BoxMotion {
+    double move_m;
+    double turn;  // rad
+};
+inline BoxMotion box_motion(const Pose& from, const Pose& at, const Mat3& frame, const double lower[6],
+                            const double upper[6]) {
     const Vec3 d = glm::transpose(frame) * (at.position - from.position);
     const Vec3 r = glm::transpose(frame) * quat_log(at.orientation * glm::conjugate(from.orientation));
     double move2 = 0.0, shifted_turn2 = 0.0, turn2 = 0.0;
@@ -128,17 +138,74 @@ inline double box_motion_bound(double radius, const Pose& from, const Pose& at, 
         turn2 += u * u;
     }
     const double turn = std::sqrt(turn2), turned = glm::length(r);
-    if (!(turn <= 0.1) || !(turned <= 0.1)) return std::numeric_limits<double>::infinity();
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    if (!(turn <= 0.1) || !(turned <= 0.1)) return {inf, inf};
     const double angle = std::sqrt(shifted_turn2) + turned * turn;
-    return (std::sqrt(move2) + angle * radius) * (1.0 + 1e-9) + 1e-12;
+    return {std::sqrt(move2) * (1.0 + 1e-9) + 1e-12, angle * (1.0 + 1e-9)};
 }
 
-// What a distance known to lie in [lo - motion, hi + motion] settles about a triangle at reach
+// How far no point within `radius` of the tool's origin moves from pose `from` to any pose of the
+// box (box_motion).
+inline double box_motion_bound(double radius, const Pose& from, const Pose& at, const Mat3& frame,
+                               const double lower[6], const double upper[6]) {
+    const BoxMotion b = box_motion(from, at, frame, lower, upper);
+    return b.move_m + b.turn * radius;
+}
+
+// How far a piece reaches within a box of the step's coordinates, as a whole and for one triangle.
+// A pose of the box moves a point p of the piece by at most move + turn |p - o| (o the tool's
+// origin, which the box turns about). So a point that comes within the contact distance of
+// triangle T at some pose of the box was within D of T at the base, where D is at most the
+// piece's reach (|p - o| at most the piece's radius: box_reach) and at most contact + move +
+// turn (|p - o| + move) with |p - o| <= D + rho, rho the furthest of T's vertices from o. T is out
+// of reach when further than `of(rho)` from the piece at the base. Near the origin -- a probe's
+// tip, where it touches -- the turn hardly counts; for the piece as a whole it moves the far end
+// of a 12 mm tip by the turn's full arc.
+struct PieceReach {
+    double reach = 0.0;   // the piece's reach (m), = box_reach
+    double move = 0.0;    // the box's largest translation (m)
+    double turn = 0.0;    // its largest turn (rad)
+    double radius = 0.0;  // the piece's radius (ToolPiece::radius_m)
+    double contact = 0.0; // the contact distance (m)
+    double room = 0.0;    // the tolerance's room (m)
+    Vec3 origin{0.0};     // the tool's origin at the base (world)
+
+    // The furthest of a triangle's vertices from the origin (m).
+    double rho(const Vec3& a, const Vec3& b, const Vec3& c) const {
+        return std::sqrt(std::max({glm::dot(a - origin, a - origin), glm::dot(b - origin, b - origin),
+                                   glm::dot(c - origin, c - origin)}));
+    }
+    // The reach of a triangle that far.
+    double of(double rho) const {
+        return std::min(reach, move + turn * (std::min(radius, reach + rho) + move) + contact + room);
+    }
+};
+
+// A piece's reach within the box [lower, upper] from the base with the tool's origin at `origin`.
+inline PieceReach piece_reach(const RendererSettings& S, double piece_radius, const Vec3& origin, const double lower[6],
+                              const double upper[6]) {
+    double move2 = 0.0, turn2 = 0.0;
+    for (int j = 0; j < 6; ++j) {
+        const double m = std::max(std::abs(lower[j]), std::abs(upper[j]));
+        (j < 3 ? move2 : turn2) += m * m;
+    }
+    PieceReach r;
+    r.move = std::sqrt(move2);
+    r.turn = std::sqrt(turn2);
+    r.radius = piece_radius;
+    r.contact = S.contact_distance_m;
+    r.room = 20.0 * S.constraint_tol_m;
+    r.origin = origin;
+    r.reach = r.move + r.turn * (piece_radius + r.move) + r.contact + r.room;
+    return r;
+}
+
+// What a distance known to lie in [lo - motion_lo, hi + motion_hi] settles about a triangle at reach
 // `reach`: out (GJK to `tol` could not keep it), in (nor drop it), or open (measure it).
 enum class Settled { Open, In, Out };
-inline Settled settle(double lo, double hi, double motion, double reach, double tol) {
-    if (lo - motion > reach + tol) return Settled::Out;
-    if (hi + motion <= reach) return Settled::In;
+inline Settled settle(double lo, double hi, double motion_lo, double motion_hi, double reach, double tol) {
+    if (lo - motion_lo > reach + tol) return Settled::Out;
+    if (hi + motion_hi <= reach) return Settled::In;
     return Settled::Open;
 }
 
@@ -195,6 +262,51 @@ inline bool near_cache_entry_motion(NearCache& c, const Model& model, const Near
     if (e.stamp == 0 || e.stamp > c.stamp) return false;
     motion = (c.path_m[k] - e.path_m) * (1.0 + 1e-12) + 1e-15 * (1.0 + c.path_m[k]);
     return true;
+}
+
+// How far the tool's origin moved between two poses, and by what angle the tool turned: a point
+// at distance r from the origin at the first moved at most move_m + turn r (OriginMotion::bound).
+struct OriginMotion {
+    double move_m = 0.0;
+    double turn = 0.0;  // rad
+    // With room for the rounding of placing the tool at either pose, as motion_bound's.
+    double bound(double r) const {
+        return (move_m + turn * r) * (1.0 + 1e-9) + 1e-12 + 1e-13 * (move_m + r);
+    }
+};
+
+inline OriginMotion origin_motion(const Pose& from, const Pose& to) {
+    return {glm::length(to.position - from.position),
+            glm::length(quat_log(to.orientation * glm::conjugate(from.orientation)))};
+}
+
+// The tool's motion from the pose of `stamp` to the current one; false when that pose is no longer
+// kept.
+inline bool near_cache_origin_motion(NearCache& c, uint64_t stamp, OriginMotion& motion) {
+    if (stamp == 0 || stamp > c.stamp || c.stamp - stamp >= uint64_t(kNearCacheSlots)) return false;
+    const int slot = int(stamp % kNearCacheSlots);
+    if (c.ring_stamp[slot] != stamp) return false;
+    if (c.origin_for[slot] != c.stamp) {
+        const OriginMotion m = origin_motion(c.ring[slot], c.ring[c.stamp % kNearCacheSlots]);
+        c.origin_move_m[slot] = m.move_m;
+        c.origin_turn[slot] = m.turn;
+        c.origin_for[slot] = c.stamp;
+    }
+    motion = {c.origin_move_m[slot], c.origin_turn[slot]};
+    return true;
+}
+
+// How much a triangle's distance from a piece can have changed since it was lo (or hi) at an
+// earlier pose, when the tool moved by `om` since and rho bounds the triangle's vertices' distance
+// from the tool's origin now. The closest point p of the piece there, at |p - t| >= lo from the
+// triangle's point t, lay within |p - t| + |t - o| of the origin o there, and |t - o| is at most
+// rho plus the origin's move: p moved by at most move + turn (|p - t| + rho + move), so the
+// distance fell by at most that with |p - t| = max(lo, 0) (the factor 1 - turn on |p - t| only
+// helps). Likewise it rose by at most that with hi. The piece's own bound (motion_bound, the
+// turn times its spread from its centre) is larger wherever the triangle lies near the origin:
+// a probe's tip, where it touches.
+inline double triangle_motion(const OriginMotion& om, double distance, double rho) {
+    return om.bound(std::max(distance, 0.0) + rho + om.move_m);
 }
 
 inline uint32_t near_cache_hash(uint16_t object, uint32_t tri) {

@@ -197,12 +197,16 @@ struct Workspace {
     // earlier one).
     bool near_complete = false;
     double near_reach[kMaxToolPieces] = {};
+    double near_move[kMaxToolPieces] = {};  // the box's translation and turn behind near_reach
+    double near_turn[kMaxToolPieces] = {};
     // A complete near set of an earlier pass of the tick, which a later pass narrows where it
     // covers the pass's box (prior_* as near_* above).
     NearTri prior[kMaxNear];
     int prior_count = 0;
     Pose prior_pose;
     double prior_reach[kMaxToolPieces] = {};
+    double prior_move[kMaxToolPieces] = {};
+    double prior_turn[kMaxToolPieces] = {};
     int tests = 0;  // triangle tests of this tick (StepStats::triangles_tested)
     FeatureKey feats[kMaxFeatures];
     int feat_count = 0;
@@ -537,16 +541,26 @@ PieceNearCache* piece_superset(const Model& model, NearCache& c, size_t k, const
 }
 
 // Whether the earlier pass's complete near set (Workspace::prior) holds every triangle piece k can
-// reach from pose `at` within the box [lower, upper] of the step's coordinates (in `frame`): when
-// no point of the piece moves further from the prior's pose (box_motion_bound), with the contact
-// distance and the tolerance's room, than the prior's reach, nothing the piece reaches now lies
-// outside the prior set.
+// reach from pose `at` within the box [lower, upper] of the step's coordinates (in `frame`). The
+// prior holds every triangle within its own reach (PieceReach::of, with the prior box's move and
+// turn) of the piece at the prior's pose. A point p the piece brings within the contact distance
+// of triangle T from the box moves at most move' + turn' |p - o| from the prior's pose
+// (box_motion), so it was within the contact distance plus that of T there, with |p - o| at most
+// u = min(radius, prior reach + rho) (rho: T's furthest vertex from the prior's origin) when the
+// whole piece's need is within the prior's reach. The prior's reach of T is move + turn (u +
+// move), with the same contact distance and room: it covers when move' + turn' u is no more for
+// every u in [min(radius, prior reach), radius], that is at both ends.
 bool prior_covers(const Model& model, size_t k, const Pose& at, const Mat3& frame, const double lower[6],
                   const double upper[6], const Workspace& w) {
     const RendererSettings& S = model.settings;
-    const double need = box_motion_bound(model.tool.pieces[k].radius_m, w.prior_pose, at, frame, lower, upper) +
-                        S.contact_distance_m + 20.0 * S.constraint_tol_m;
-    return need <= w.prior_reach[k];
+    const double radius = model.tool.pieces[k].radius_m;
+    const BoxMotion b = box_motion(w.prior_pose, at, frame, lower, upper);
+    const double need = b.move_m + b.turn * radius + S.contact_distance_m + 20.0 * S.constraint_tol_m;
+    if (!(need <= w.prior_reach[k])) return false;
+    const double move = w.prior_move[k], turn = w.prior_turn[k];
+    for (const double u : {std::min(radius, w.prior_reach[k]), radius})
+        if (!(b.move_m + b.turn * u <= move + turn * (u + move))) return false;
+    return true;
 }
 
 // detect: the triangles each piece of the tool can reach within the box [lower, upper] of the
@@ -591,8 +605,16 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
         const ToolPiece& piece = model.tool.pieces[k];
         const uint8_t pk = static_cast<uint8_t>(k);
         // How far this piece's points can move within the box.
-        const double reach = box_reach(model.settings, piece.radius_m, lower, upper);
+        const PieceReach pr = piece_reach(model.settings, piece.radius_m, at.position, lower, upper);
+        const double reach = pr.reach;
         w.near_reach[k] = reach;
+        w.near_move[k] = pr.move;
+        w.near_turn[k] = pr.turn;
+        // How far a triangle's vertices are from the tool's origin (PieceReach::rho).
+        auto rho_of = [&](const ModelObject& obj, uint32_t tri) {
+            const auto& t = obj.mesh.triangles[tri];
+            return pr.rho(obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]);
+        };
         const Vec3* axis = w.capsule + k * (kToolCapsules + 1);
         Aabb box;
         for (uint32_t v = piece.vertex_begin; v < piece.vertex_begin + piece.vertex_count; ++v) box.grow(tool_world[v]);
@@ -601,6 +623,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                                 prior_covers(model, k, at, *prior_frame, lower, upper, w);
         narrowed |= from_prior;
         const double prior_motion = from_prior ? motion_bound(piece, w.prior_pose, at) : 0.0;
+        const OriginMotion prior_turn = from_prior ? origin_motion(w.prior_pose, at) : OriginMotion{};
         PieceNearCache* pc = use_cache && piece.capsule_count > 0 && !from_prior
                                  ? piece_superset(model, cache, k, at, axis, reach, tol)
                                  : nullptr;
@@ -641,10 +664,10 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
             // A triangle whose bounds [lo, hi] from an earlier pose, widened by the motion `m`
             // since, settle that it is in reach: kept with them, no separation (a bound this old
             // is too loose for the guard, which measures it itself where it needs it).
-            auto keep_settled = [&](uint32_t tri, double lo, double hi, double m, const Vec3& direction,
-                                    const GjkSimplex& simplex) {
-                NearTri nt{ok, tri, pk, lo - m};
-                nt.upper_m = hi + m;
+            auto keep_settled = [&](uint32_t tri, double lo, double hi, double m_lo, double m_hi,
+                                    const Vec3& direction, const GjkSimplex& simplex) {
+                NearTri nt{ok, tri, pk, lo - m_lo};
+                nt.upper_m = hi + m_hi;
                 nt.direction = direction;
                 nt.simplex = simplex;
                 return push(nt);
@@ -659,14 +682,18 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                        w.prior[prior_cursor].object == ok && !overflow;
                      ++prior_cursor) {
                     const NearTri& q = w.prior[prior_cursor];
-                    const Settled verdict = settle(q.lower_m, q.upper_m, prior_motion, reach, tol);
+                    const double rho = rho_of(obj, q.tri), tri_reach = pr.of(rho);
+                    // The motion since, the piece's or the triangle's (triangle_motion), whichever is less.
+                    const double m_lo = std::min(prior_motion, triangle_motion(prior_turn, q.lower_m, rho));
+                    const double m_hi = std::min(prior_motion, triangle_motion(prior_turn, q.upper_m, rho));
+                    const Settled verdict = settle(q.lower_m, q.upper_m, m_lo, m_hi, tri_reach, tol);
                     if (verdict == Settled::Out) continue;
                     if (verdict == Settled::In) {
-                        if (!keep_settled(q.tri, q.lower_m, q.upper_m, prior_motion, q.direction, q.simplex)) break;
+                        if (!keep_settled(q.tri, q.lower_m, q.upper_m, m_lo, m_hi, q.direction, q.simplex)) break;
                         continue;
                     }
                     const NearVerdict v =
-                        judge_near(model, k, view, axis, obj, q.tri, reach, tol, false, 2.0 * reach, &q.direction,
+                        judge_near(model, k, view, axis, obj, q.tri, tri_reach, tol, false, 2.0 * reach, &q.direction,
                                    &q.simplex);
                     if (v.keep)
                         keep(q.tri, v.lo, v.hi, glm::dot(v.direction, v.direction) > 0.0 ? v.direction : q.direction,
@@ -680,20 +707,29 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                     // Out of reach while the path has not grown by its distance bound since.
                     if (pc->due[cursor] - path > skip_over) continue;
                     NearCacheEntry& e = pc->entries[cursor];
+                    const double rho = rho_of(obj, e.tri), tri_reach = pr.of(rho);
                     double m;
                     if (near_cache_entry_motion(cache, model, e, k, m)) {
+                        // The piece's motion since, or the triangle's (triangle_motion) while the
+                        // entry's pose is kept, whichever is less.
+                        double m_lo = m, m_hi = m;
+                        OriginMotion om;
+                        if (near_cache_origin_motion(cache, e.stamp, om)) {
+                            m_lo = std::min(m, triangle_motion(om, e.lo, rho));
+                            m_hi = std::min(m, triangle_motion(om, e.hi, rho));
+                        }
                         // Before its pose leaves the ring, a settled entry's bounds move to the
                         // current pose (widened by the motion since), rather than being bounded
                         // by the looser path once forgotten.
                         const bool rebase = cache.stamp - e.stamp >= uint64_t(kNearCacheSlots / 2);
-                        const Settled verdict = settle(e.lo, e.hi, m, reach, tol);
+                        const Settled verdict = settle(e.lo, e.hi, m_lo, m_hi, tri_reach, tol);
                         const bool out = verdict == Settled::Out, in = verdict == Settled::In;
-                        if (in && !keep_settled(e.tri, e.lo, e.hi, m, e.direction, e.simplex)) break;
+                        if (in && !keep_settled(e.tri, e.lo, e.hi, m_lo, m_hi, e.direction, e.simplex)) break;
                         if (out || in) {
-                            pc->due[cursor] = (e.lo - m) + path;
+                            pc->due[cursor] = (e.lo - m_lo) + path;
                             if (rebase) {
-                                e.lo -= m;
-                                if (e.hi < 1e300) e.hi += m;
+                                e.lo -= m_lo;
+                                if (e.hi < 1e300) e.hi += m_hi;
                                 e.stamp = cache.stamp;
                                 e.path_m = path;
                             }
@@ -701,7 +737,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                         }
                     }
                     const NearVerdict v =
-                        judge_near(model, k, view, axis, obj, e.tri, reach, tol, false, 2.0 * reach, &e.direction,
+                        judge_near(model, k, view, axis, obj, e.tri, tri_reach, tol, false, 2.0 * reach, &e.direction,
                                    &e.simplex);
                     e.lo = v.lo;
                     e.hi = v.hi;
@@ -717,8 +753,8 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                 // when GJK finds it within reach of the piece itself.
                 obj.bvh.query_capsule_chain(axis, piece.capsule_radii_m.data(), piece.capsule_count, reach,
                                             [&](uint32_t tri) {
-                                                const NearVerdict v =
-                                                    judge_near(model, k, view, axis, obj, tri, reach, tol, any_only);
+                                                const NearVerdict v = judge_near(model, k, view, axis, obj, tri,
+                                                                                 pr.of(rho_of(obj, tri)), tol, any_only);
                                                 return v.keep ? keep(tri, v.lo, v.hi, v.direction, v.simplex) : true;
                                             });
             }
@@ -1311,13 +1347,7 @@ void local_box(const RendererSettings& S, double tool_radius, const double targe
 // How far any tool point can move within a box of the step's coordinates (rotation about the
 // tool origin), plus the contact distance and room for the tolerance.
 double box_reach(const RendererSettings& S, double tool_radius, const double lower[6], const double upper[6]) {
-    double move2 = 0.0, turn2 = 0.0;
-    for (int j = 0; j < 6; ++j) {
-        const double m = std::max(std::abs(lower[j]), std::abs(upper[j]));
-        (j < 3 ? move2 : turn2) += m * m;
-    }
-    const double move = std::sqrt(move2), turn = std::sqrt(turn2);
-    return move + turn * (tool_radius + move) + S.contact_distance_m + 20.0 * S.constraint_tol_m;
+    return piece_reach(S, tool_radius, Vec3(0.0), lower, upper).reach;
 }
 
 bool inside_box(const double x[6], const double lower[6], const double upper[6]) {
@@ -2168,6 +2198,8 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             w.prior_count = w.near_count;
             w.prior_pose = base;
             std::copy(w.near_reach, w.near_reach + kMaxToolPieces, w.prior_reach);
+            std::copy(w.near_move, w.near_move + kMaxToolPieces, w.prior_move);
+            std::copy(w.near_turn, w.near_turn + kMaxToolPieces, w.prior_turn);
             have_prior = true;
         }
         if (pass > 0) {
