@@ -402,3 +402,59 @@ TEST(PieceReach, ATriangleTheBoxBringsIntoContactIsInReach) {
     EXPECT_GT(trials, 2500);
     EXPECT_GT(tight, 10);
 }
+
+namespace {
+
+// The gap along unit direction n between a set of points (a convex piece's hull) and a triangle:
+// the least of n . (p - t) over them.
+double gap_along(const std::vector<Vec3>& points, const Pose& pose, const Vec3& n, const Vec3& a, const Vec3& b,
+                 const Vec3& c) {
+    double least = 1e300;
+    for (const Vec3& p : points) least = std::min(least, glm::dot(n, pose.position + pose.orientation * p));
+    return least - std::max({glm::dot(n, a), glm::dot(n, b), glm::dot(n, c)});
+}
+
+}  // namespace
+
+// direction_lower_bound: after a motion of a tick or a few, the gap along the earlier direction
+// is no less than the bound, and so neither is the distance (which no gap along a direction
+// exceeds); the bound follows the motion along the direction, so where the tool slides across it
+// the bound stays near the gap while the piece's own motion bound grows with the slide.
+TEST(DirectionLowerBound, BoundsTheGapAlongTheDirectionAfterAMotion) {
+    std::mt19937 rng(37);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const Polyline line = probe_line(rng);
+    int sliding = 0, held = 0;
+    for (int trial = 0; trial < 4000; ++trial) {
+        Pose from;
+        from.position = 0.01 * Vec3(u(rng), u(rng), u(rng));
+        from.orientation = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+        const Vec3 on = from.position + from.orientation * glm::mix(line.points[0], line.points.back(), 0.5 * (u(rng) + 1.0));
+        Vec3 a, b, c;
+        small_triangle(rng, on + 3e-4 * Vec3(u(rng), u(rng), u(rng)), a, b, c);
+        // A direction from the triangle roughly towards the piece, as GJK leaves one.
+        const Vec3 n = glm::normalize(on - (a + b + c) / 3.0 + 1e-4 * Vec3(u(rng), u(rng), u(rng)));
+        const double gap = gap_along(line.points, from, n, a, b, c);
+        Pose to;
+        const bool slide = trial % 2 == 0;
+        Vec3 shift = 5e-5 * Vec3(u(rng), u(rng), u(rng));
+        if (slide) shift -= glm::dot(shift, n) * n;  // across the direction
+        to.position = from.position + shift;
+        const double angle = trial % 4 == 0 ? 0.0 : 2e-3 * 0.5 * (u(rng) + 1.0);
+        to.orientation = glm::normalize(quat_exp(angle * glm::normalize(Vec3(u(rng), u(rng), u(rng)))) * from.orientation);
+        const OriginMotion om = origin_motion(from, to);
+        // Scaled by 3: the direction need not be unit.
+        const double bound = direction_lower_bound(om, 3.0 * n, gap, line.radius);
+        ASSERT_LE(bound, gap_along(line.points, to, n, a, b, c)) << "trial " << trial;
+        ASSERT_LE(bound, polyline_distance(line, to, a, b, c) + 1e-15) << "trial " << trial;
+        if (slide && angle == 0.0) {
+            ++sliding;
+            held += gap - bound < 1e-9 && glm::length(shift) > 1e-5;
+        }
+    }
+    EXPECT_GT(sliding, 500);
+    EXPECT_GT(held, sliding / 2);  // a slide of 10-87 um leaves it within a nanometre of the gap
+    // No direction, or no gap: no bound.
+    EXPECT_EQ(direction_lower_bound(OriginMotion{}, Vec3(0.0), 1e-3, 0.01), -1e300);
+    EXPECT_EQ(direction_lower_bound(OriginMotion{}, Vec3(1, 0, 0), -1e300, 0.01), -1e300);
+}

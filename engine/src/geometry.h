@@ -184,6 +184,11 @@ struct DistanceBounds {
     // The last search direction (from the triangle towards the polytope; zero when they touch):
     // a good hint for the same pair at a nearby pose.
     Vec3 direction{0.0};
+    // The gap along `direction` (unit): the least of (p - t) . direction / |direction| over the
+    // polytope's points p and the triangle's t, a lower bound on their distance that a motion of the
+    // polytope changes by its displacement along the direction and the turn times its radius
+    // (NearCacheEntry::direction_gap). -1e300 where there is no direction.
+    double direction_gap = -1e300;
     GjkSimplex simplex;  // the last simplex (count 0 when the hint alone settled it)
 };
 // `hint`, when given, is a direction roughly from the triangle towards the polytope: the search

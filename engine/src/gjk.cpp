@@ -152,6 +152,7 @@ GjkSimplex names_of(const Simplex& s) {
 DistanceBounds& touching(DistanceBounds& r, const Simplex& s) {
     r.lower = r.upper = 0.0;
     r.direction = Vec3(0.0);
+    r.direction_gap = -1e300;
     r.simplex = names_of(s);
     return r;
 }
@@ -172,7 +173,8 @@ DistanceBounds distance_bounds(const ConvexView& poly, const Vec3& a, const Vec3
     double lower = 0.0;
     if (hinted) {
         // The gap along the hint itself.
-        lower = std::max(0.0, glm::dot(*hint, s.p[0].p) / glm::length(*hint));
+        r.direction_gap = glm::dot(*hint, s.p[0].p) / glm::length(*hint);
+        lower = std::max(0.0, r.direction_gap);
         r.lower = lower;
         r.direction = *hint;
         if (lower >= cutoff) return r;
@@ -206,7 +208,8 @@ DistanceBounds distance_bounds(const ConvexView& poly, const Vec3& a, const Vec3
         const double vl = std::sqrt(vv);
         const Point w = support_least(poly, tri, v, s.p[s.n - 1].ia);
         // Every point z of D has v.z >= v.w: the gap along v bounds the distance.
-        lower = std::max(lower, glm::dot(v, w.p) / vl);
+        r.direction_gap = glm::dot(v, w.p) / vl;
+        lower = std::max(lower, r.direction_gap);
         r.lower = lower;
         r.upper = vl;
         r.direction = v;

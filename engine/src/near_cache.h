@@ -41,6 +41,11 @@ struct NearCacheEntry {
     double hi = 1e300;
     Vec3 direction{0.0};  // GJK's last direction there (world; zero if none): the next search's start
     GjkSimplex simplex{};  // and the simplex it ended on
+    // A lower bound there on the gap along `direction` (DistanceBounds::direction_gap), -1e300 for
+    // none. The tool's motion since changes it by no more than the origin's displacement along
+    // the direction and the turn times the piece's radius (direction_lower_bound): while the tool
+    // slides along a surface, far less than its whole motion.
+    double direction_gap = -1e300;
 };
 
 struct PieceNearCache {
@@ -49,6 +54,9 @@ struct PieceNearCache {
     double radius_m = 0.0;  // every triangle within this of the piece there is in it
     int count = 0;          // entries, grouped by object in object order
     NearCacheEntry entries[kNearCacheEntries];
+    // Per entry, its object (entries[i].object): the walk over the entries finds each object's run
+    // here without touching an entry's line of memory for every one it skips.
+    uint16_t object[kNearCacheEntries];
     // Per entry, when it needs a look again: the lower bound on its triangle's distance from the
     // piece when it was last looked at, plus the piece's path then. `due` less the path now bounds
     // the distance now from below; while that exceeds the reach (and the tolerance), the triangle
@@ -96,12 +104,11 @@ struct NearCache {
     double path_m[kMaxToolPieces] = {};
     // Per slot, how far the tool's origin moved and how far the tool turned from the slot's pose
     // to the current one, worked out once per current pose (origin_motion).
-    double origin_move_m[kNearCacheSlots] = {};
+    Vec3 origin_shift[kNearCacheSlots] = {};  // m
     double origin_turn[kNearCacheSlots] = {};
     uint64_t origin_for[kNearCacheSlots] = {};
     PieceNearCache piece[kMaxToolPieces];
-    NearCacheEntry previous[kNearCacheEntries];  // a superset being replaced
-    int32_t table[kNearCacheHash];               // (object, triangle) -> index in `previous`
+    int32_t table[kNearCacheHash];  // (object, triangle) -> index in the superset being replaced
     SupersetBuild build;                         // at most one in progress
 };
 
@@ -267,7 +274,8 @@ inline bool near_cache_entry_motion(NearCache& c, const Model& model, const Near
 // How far the tool's origin moved between two poses, and by what angle the tool turned: a point
 // at distance r from the origin at the first moved at most move_m + turn r (OriginMotion::bound).
 struct OriginMotion {
-    double move_m = 0.0;
+    Vec3 shift{0.0};    // the origin's displacement (m)
+    double move_m = 0.0;  // its length
     double turn = 0.0;  // rad
     // With room for the rounding of placing the tool at either pose, as motion_bound's.
     double bound(double r) const {
@@ -276,8 +284,8 @@ struct OriginMotion {
 };
 
 inline OriginMotion origin_motion(const Pose& from, const Pose& to) {
-    return {glm::length(to.position - from.position),
-            glm::length(quat_log(to.orientation * glm::conjugate(from.orientation)))};
+    const Vec3 shift = to.position - from.position;
+    return {shift, glm::length(shift), glm::length(quat_log(to.orientation * glm::conjugate(from.orientation)))};
 }
 
 // The tool's motion from the pose of `stamp` to the current one; false when that pose is no longer
@@ -288,11 +296,11 @@ inline bool near_cache_origin_motion(NearCache& c, uint64_t stamp, OriginMotion&
     if (c.ring_stamp[slot] != stamp) return false;
     if (c.origin_for[slot] != c.stamp) {
         const OriginMotion m = origin_motion(c.ring[slot], c.ring[c.stamp % kNearCacheSlots]);
-        c.origin_move_m[slot] = m.move_m;
+        c.origin_shift[slot] = m.shift;
         c.origin_turn[slot] = m.turn;
         c.origin_for[slot] = c.stamp;
     }
-    motion = {c.origin_move_m[slot], c.origin_turn[slot]};
+    motion = {c.origin_shift[slot], glm::length(c.origin_shift[slot]), c.origin_turn[slot]};
     return true;
 }
 
@@ -309,29 +317,58 @@ inline double triangle_motion(const OriginMotion& om, double distance, double rh
     return om.bound(std::max(distance, 0.0) + rho + om.move_m);
 }
 
+// A lower bound now on the distance between a piece and a triangle whose gap along the unit
+// direction n (from the triangle towards the piece) was `gap` at an earlier pose, the tool having
+// moved by `om` since: each point p of the piece moved by the origin's shift plus the turn of
+// p - o (o the origin then), which is at most the turn times `piece_radius`, so the piece's least
+// extent along n rose by at least n . shift less that and the triangle's most did not move. The
+// gap along n bounds the distance below. With room for the rounding of placing the tool at
+// either pose, as OriginMotion::bound's. -1e300 for a zero direction.
+inline double direction_lower_bound(const OriginMotion& om, const Vec3& direction, double gap, double piece_radius) {
+    const double len = glm::length(direction);
+    if (!(len > 0.0) || !(gap > -1e299)) return -1e300;
+    const double turned = om.turn * piece_radius;
+    return gap + glm::dot(direction, om.shift) / len - turned - (om.move_m + turned) * 1e-9 - 1e-12 -
+           1e-13 * (om.move_m + piece_radius);
+}
+
 inline uint32_t near_cache_hash(uint16_t object, uint32_t tri) {
     uint64_t k = (uint64_t(object) << 32) | tri;
     k *= 0x9E3779B97F4A7C15ull;
     return uint32_t(k >> 40) & (kNearCacheHash - 1);
 }
 
-// Files `previous[0, count)` in the table.
-inline void near_cache_index_previous(NearCache& c, int count) {
-    std::memset(c.table, 0xff, sizeof(c.table));
-    for (int i = 0; i < count; ++i) {
-        uint32_t h = near_cache_hash(c.previous[i].object, c.previous[i].tri);
-        while (c.table[h] >= 0) h = (h + 1) & (kNearCacheHash - 1);
+// The slots of the carry-over table for a superset of `count` entries: a power of two at least
+// twice the count (so probes stay short), as a mask.
+inline uint32_t near_cache_table_mask(int count) {
+    uint32_t n = 16;
+    while (n < 2u * uint32_t(count) && n < uint32_t(kNearCacheHash)) n <<= 1;
+    return n - 1;
+}
+
+// Indexes the entries of `pc` whose pose the ring still keeps by (object, triangle), in the slots
+// `mask` gives (near_cache_table_mask of pc.count).
+inline void near_cache_index(NearCache& c, const PieceNearCache& pc, uint32_t mask) {
+    std::memset(c.table, 0xff, sizeof(int32_t) * (mask + 1));
+    for (int i = 0; i < pc.count; ++i) {
+        const uint64_t stamp = pc.entries[i].stamp;
+        if (stamp == 0 || stamp > c.stamp || c.stamp - stamp >= uint64_t(kNearCacheSlots) ||
+            c.ring_stamp[stamp % kNearCacheSlots] != stamp)
+            continue;
+        uint32_t h = near_cache_hash(pc.object[i], pc.entries[i].tri) & mask;
+        while (c.table[h] >= 0) h = (h + 1) & mask;
         c.table[h] = i;
     }
 }
 
-// The entry of `previous` for (object, tri), or null.
-inline const NearCacheEntry* near_cache_find_previous(const NearCache& c, uint16_t object, uint32_t tri) {
-    uint32_t h = near_cache_hash(object, tri);
+// The indexed entry of `pc` for (object, tri), or null.
+inline const NearCacheEntry* near_cache_find(const NearCache& c, const PieceNearCache& pc, uint32_t mask,
+                                             uint16_t object, uint32_t tri) {
+    uint32_t h = near_cache_hash(object, tri) & mask;
     while (c.table[h] >= 0) {
-        const NearCacheEntry& e = c.previous[c.table[h]];
+        const NearCacheEntry& e = pc.entries[c.table[h]];
         if (e.tri == tri && e.object == object) return &e;
-        h = (h + 1) & (kNearCacheHash - 1);
+        h = (h + 1) & mask;
     }
     return nullptr;
 }

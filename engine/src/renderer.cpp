@@ -379,6 +379,7 @@ struct NearVerdict {
     double hi = 1e300;
     Vec3 direction{0.0};
     GjkSimplex simplex{};
+    double direction_gap = -1e300;  // DistanceBounds::direction_gap
 };
 
 NearVerdict judge_near(const Model& model, size_t k, const ConvexView& view, const Vec3* axis, const ModelObject& obj,
@@ -401,7 +402,7 @@ NearVerdict judge_near(const Model& model, size_t k, const ConvexView& view, con
         g.lower = g.upper = distance_convex_triangle_by_faces(view, piece_triangles(model.tool, k),
                                                               int(piece.triangle_count), a, b, c);
     }
-    return NearVerdict{g.lower <= reach, std::max(bound, g.lower), g.upper, g.direction, g.simplex};
+    return NearVerdict{g.lower <= reach, std::max(bound, g.lower), g.upper, g.direction, g.simplex, g.direction_gap};
 }
 
 // How much further than the tick's reach a piece's superset reaches: the tool can move that far
@@ -474,23 +475,24 @@ bool advance_superset(const Model& model, NearCache& c, long budget) {
 void install_superset(const Model& model, NearCache& c) {
     SupersetBuild& b = c.build;
     PieceNearCache& pc = c.piece[b.piece];
-    int kept = 0;
-    if (pc.valid) {
-        for (int i = 0; i < pc.count; ++i) {
-            double m;
-            if (near_cache_motion(c, model, pc.entries[i].stamp, b.piece, m)) c.previous[kept++] = pc.entries[i];
-        }
-    }
-    near_cache_index_previous(c, kept);
+    // The old entries whose pose is still kept, found by triangle; the new ones take over theirs
+    // in place, then become the piece's.
+    if (!pc.valid) pc.count = 0;
+    const uint32_t mask = near_cache_table_mask(pc.count);
+    near_cache_index(c, pc, mask);
     double built_motion = 0.0;
     const bool built_known = near_cache_motion(c, model, b.stamp, b.piece, built_motion);
     for (int i = 0; i < b.count; ++i) {
-        const NearCacheEntry* p = near_cache_find_previous(c, b.entries[i].object, b.entries[i].tri);
+        NearCacheEntry& e = b.entries[i];
+        const NearCacheEntry* p = near_cache_find(c, pc, mask, e.object, e.tri);
         double m = 0.0;
-        const bool take_old =
-            p && (p->hi < 1e300 || !built_known ||
-                  (near_cache_motion(c, model, p->stamp, b.piece, m) && p->lo - m > b.entries[i].lo - built_motion));
-        pc.entries[i] = take_old ? *p : b.entries[i];
+        if (p && (p->hi < 1e300 || !built_known ||
+                  (near_cache_motion(c, model, p->stamp, b.piece, m) && p->lo - m > e.lo - built_motion)))
+            e = *p;
+    }
+    std::copy(b.entries, b.entries + b.count, pc.entries);
+    for (int i = 0; i < b.count; ++i) {
+        pc.object[i] = b.entries[i].object;
         pc.due[i] = -1e300;  // looked at on the next tick
     }
     pc.count = b.count;
@@ -703,31 +705,54 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                 const double path = cache.path_m[k];
                 // With room for the rounding of the sums along the path.
                 const double skip_over = reach + tol + 1e-15 * (1.0 + path);
-                for (; cursor < pc->count && pc->entries[cursor].object == ok && !overflow; ++cursor) {
+                for (; cursor < pc->count && pc->object[cursor] == ok && !overflow; ++cursor) {
                     // Out of reach while the path has not grown by its distance bound since.
                     if (pc->due[cursor] - path > skip_over) continue;
                     NearCacheEntry& e = pc->entries[cursor];
-                    const double rho = rho_of(obj, e.tri), tri_reach = pr.of(rho);
                     double m;
-                    if (near_cache_entry_motion(cache, model, e, k, m)) {
+                    const bool known = near_cache_entry_motion(cache, model, e, k, m);
+                    // Before its pose leaves the ring, a settled entry's bounds move to the
+                    // current pose (widened by the motion since), rather than being bounded by
+                    // the looser path once forgotten.
+                    const bool rebase = cache.stamp - e.stamp >= uint64_t(kNearCacheSlots / 2);
+                    if (known && !rebase && e.lo - m > reach + tol) {
+                        // Out of the piece's reach, so of the triangle's: its mesh is not read.
+                        pc->due[cursor] = (e.lo - m) + path;
+                        continue;
+                    }
+                    const double rho = rho_of(obj, e.tri), tri_reach = pr.of(rho);
+                    if (known) {
                         // The piece's motion since, or the triangle's (triangle_motion) while the
                         // entry's pose is kept, whichever is less.
                         double m_lo = m, m_hi = m;
                         OriginMotion om;
-                        if (near_cache_origin_motion(cache, e.stamp, om)) {
+                        const bool kept = near_cache_origin_motion(cache, e.stamp, om);
+                        if (kept) {
                             m_lo = std::min(m, triangle_motion(om, e.lo, rho));
                             m_hi = std::min(m, triangle_motion(om, e.hi, rho));
                         }
-                        // Before its pose leaves the ring, a settled entry's bounds move to the
-                        // current pose (widened by the motion since), rather than being bounded
-                        // by the looser path once forgotten.
-                        const bool rebase = cache.stamp - e.stamp >= uint64_t(kNearCacheSlots / 2);
-                        const Settled verdict = settle(e.lo, e.hi, m_lo, m_hi, tri_reach, tol);
+                        Settled verdict = settle(e.lo, e.hi, m_lo, m_hi, tri_reach, tol);
+                        // Left open, the gap along the last direction may still settle it: the
+                        // tool sliding along a surface hardly nears the triangles beside it.
+                        double along = -1e300;
+                        if (verdict == Settled::Open && kept) {
+                            along = direction_lower_bound(om, e.direction, e.direction_gap, piece.radius_m);
+                            if (e.lo - along < m_lo) {
+                                m_lo = e.lo - along;
+                                verdict = settle(e.lo, e.hi, m_lo, m_hi, tri_reach, tol);
+                            }
+                        }
                         const bool out = verdict == Settled::Out, in = verdict == Settled::In;
                         if (in && !keep_settled(e.tri, e.lo, e.hi, m_lo, m_hi, e.direction, e.simplex)) break;
                         if (out || in) {
                             pc->due[cursor] = (e.lo - m_lo) + path;
                             if (rebase) {
+                                // The gap along the direction, where it was not measured, no less
+                                // than the motion leaves of it.
+                                e.direction_gap = kept ? std::max(along, direction_lower_bound(om, e.direction,
+                                                                                              e.direction_gap,
+                                                                                              piece.radius_m))
+                                                       : -1e300;
                                 e.lo -= m_lo;
                                 if (e.hi < 1e300) e.hi += m_hi;
                                 e.stamp = cache.stamp;
@@ -741,7 +766,10 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                                    &e.simplex);
                     e.lo = v.lo;
                     e.hi = v.hi;
-                    if (glm::dot(v.direction, v.direction) > 0.0) e.direction = v.direction;
+                    // A direction of this measurement comes with its gap; an older one has none here.
+                    const bool measured = glm::dot(v.direction, v.direction) > 0.0;
+                    if (measured) e.direction = v.direction;
+                    e.direction_gap = measured ? v.direction_gap : -1e300;
                     if (v.simplex.count > 0) e.simplex = v.simplex;
                     e.stamp = cache.stamp;
                     e.path_m = path;
