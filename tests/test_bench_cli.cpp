@@ -137,7 +137,8 @@ TEST_F(Bench, TicksCsvHasOneRowPerStepAndNoChecksWhenAskedNone) {
     const std::vector<std::string> lines = split(read_text(ticks / "paper_cavity_1mm_ticks.csv"), '\n');
     ASSERT_EQ(long(lines.size()), s.value("steps", 0L) + 1);
     const std::vector<std::string> header = split(lines[0], ',');
-    for (const char* col : {"tick", "status", "step_us", "detect_us", "triangles_near", "candidates", "passes"})
+    for (const char* col : {"tick", "status", "step_us", "detect_us", "triangles_near", "candidates", "passes", "px_m",
+                            "qw", "fz_N"})
         EXPECT_NE(std::find(header.begin(), header.end(), col), header.end()) << col;
     // Every row has every column, its tick index first, and the contact ticks the JSON counts.
     long contact = 0;

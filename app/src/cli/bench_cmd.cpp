@@ -39,8 +39,8 @@ const char* const kHelpBench =
     "  --max-ticks N    only the first N ticks of each scene (for profiling)\n"
     "  --check-every N  the exact checks on every N-th tick with a force instead (0: none)\n"
     "  --ticks DIR      also write each scene's ticks, one row per step with its status, stage\n"
-    "                   times and counters, to DIR/<scene>_ticks.csv ('/' in a name as '_'):\n"
-    "                   to find the slow ticks\n"
+    "                   times, counters, graphic pose and force, to DIR/<scene>_ticks.csv ('/' in a\n"
+    "                   name as '_'): to find the slow ticks, and to compare two builds' answers\n"
     "  --list           print the scene names and exit\n";
 
 namespace {
@@ -105,15 +105,22 @@ bool write_ticks_csv(const std::string& path, const BenchRun& run) {
     if (!f) return false;
     std::fprintf(f, "tick,status,step_us,detect_us,gather_us,solve_us,select_us,force_us,triangles_near,"
                     "triangles_tested,atoms_gathered,candidates,atoms,qp_solves,qp_iterations,relinearizations,"
-                    "passes,released,gather_truncated,regions,soft_depth_m,allocations\n");
+                    "passes,released,gather_truncated,regions,soft_depth_m,allocations,px_m,py_m,pz_m,qw,qx,qy,qz,"
+                    "fx_N,fy_N,fz_N\n");
     for (size_t i = 0; i < run.ticks.size(); ++i) {
         const BenchTick& t = run.ticks[i];
         const StepStats& s = t.stats;
-        std::fprintf(f, "%zu,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%.9g,%ld\n", i,
-                     to_string(t.status), t.step_us, s.times.detect_us, s.times.gather_us, s.times.solve_us,
+        // The answer to the last bit (%.17g), so that runs of two builds compare exactly.
+        const Vec3& p = t.graphic.position;
+        const Quat& q = t.graphic.orientation;
+        std::fprintf(f,
+                     "%zu,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%.9g,%ld,"
+                     "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n",
+                     i, to_string(t.status), t.step_us, s.times.detect_us, s.times.gather_us, s.times.solve_us,
                      s.times.select_us, s.times.force_us, s.triangles_near, s.triangles_tested, s.atoms_gathered,
                      s.candidates, s.atoms, s.qp_solves, s.qp_iterations, s.relinearizations, s.passes,
-                     int(s.released), int(s.gather_truncated), s.regions, s.soft_depth_m, t.allocations);
+                     int(s.released), int(s.gather_truncated), s.regions, s.soft_depth_m, t.allocations, p.x, p.y, p.z,
+                     q.w, q.x, q.y, q.z, t.force_N.x, t.force_N.y, t.force_N.z);
     }
     return std::fclose(f) == 0;
 }
