@@ -251,6 +251,26 @@ void small_triangle(std::mt19937& rng, const Vec3& at, Vec3& a, Vec3& b, Vec3& c
     c = at + 5e-5 * Vec3(u(rng), u(rng), u(rng));
 }
 
+// A pose within 10 mm of the origin on each axis, turned anyhow.
+Pose random_pose(std::mt19937& rng) {
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Pose p;
+    p.position = 0.01 * Vec3(u(rng), u(rng), u(rng));
+    p.orientation = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+    return p;
+}
+
+// A box of the step's coordinates as the force-continuity boxes are: up to 20 um of move and
+// 2 mrad of turn a side on each axis.
+void random_box(std::mt19937& rng, double lower[6], double upper[6]) {
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    for (int j = 0; j < 6; ++j) {
+        const double s = j < 3 ? 2e-5 : 2e-3;
+        lower[j] = -s * 0.5 * (u(rng) + 1.0);
+        upper[j] = s * 0.5 * (u(rng) + 1.0);
+    }
+}
+
 }  // namespace
 
 // triangle_motion: a triangle's distance from the piece changes by no more than the bound from
@@ -273,9 +293,7 @@ TEST(TriangleMotion, BoundsHowFarATrianglesDistanceMoves) {
     double worst = 0.0;
     int near_origin = 0, tighter = 0, turning = 0, halved = 0;
     for (int trial = 0; trial < 4000; ++trial) {
-        Pose from;
-        from.position = 0.01 * Vec3(u(rng), u(rng), u(rng));
-        from.orientation = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+        const Pose from = random_pose(rng);
         Pose to;
         const double move = trial % 4 == 0 ? 0.0 : 5e-5 * (u(rng) + 1.0);
         to.position = from.position + move * glm::normalize(Vec3(u(rng), u(rng), u(rng)));
@@ -322,15 +340,9 @@ TEST(PieceReach, ATriangleBeyondItsReachStaysOutOfContactOverTheBox) {
     RendererSettings S;
     int beyond = 0, only_by_triangle = 0;
     for (int trial = 0; trial < 1500; ++trial) {
-        Pose base;
-        base.position = 0.01 * Vec3(u(rng), u(rng), u(rng));
-        base.orientation = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+        const Pose base = random_pose(rng);
         double lower[6], upper[6];
-        for (int j = 0; j < 6; ++j) {
-            const double s = j < 3 ? 2e-5 : 2e-3;
-            lower[j] = -s * 0.5 * (u(rng) + 1.0);
-            upper[j] = s * 0.5 * (u(rng) + 1.0);
-        }
+        random_box(rng, lower, upper);
         const PieceReach pr = piece_reach(S, line.radius, base.position, lower, upper);
         const Vec3 on = base.position + base.orientation * glm::mix(line.points[0], line.points.back(), 0.5 * (u(rng) + 1.0));
         Vec3 a, b, c;
@@ -367,16 +379,10 @@ TEST(PieceReach, ATriangleTheBoxBringsIntoContactIsInReach) {
     RendererSettings S;
     int tight = 0, trials = 0;
     for (int trial = 0; trial < 3000; ++trial) {
-        Pose base;
-        base.position = 0.01 * Vec3(u(rng), u(rng), u(rng));
-        base.orientation = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+        const Pose base = random_pose(rng);
         double lower[6], upper[6], x[6];
-        for (int j = 0; j < 6; ++j) {
-            const double s = j < 3 ? 2e-5 : 2e-3;
-            lower[j] = -s * 0.5 * (u(rng) + 1.0);
-            upper[j] = s * 0.5 * (u(rng) + 1.0);
-            x[j] = (trial >> j) & 1 ? upper[j] : lower[j];
-        }
+        random_box(rng, lower, upper);
+        for (int j = 0; j < 6; ++j) x[j] = (trial >> j) & 1 ? upper[j] : lower[j];
         const PieceReach pr = piece_reach(S, line.radius, base.position, lower, upper);
         Pose at;
         at.position = base.position + Vec3(x[0], x[1], x[2]);
@@ -426,9 +432,7 @@ TEST(DirectionLowerBound, BoundsTheGapAlongTheDirectionAfterAMotion) {
     const Polyline line = probe_line(rng);
     int sliding = 0, held = 0;
     for (int trial = 0; trial < 4000; ++trial) {
-        Pose from;
-        from.position = 0.01 * Vec3(u(rng), u(rng), u(rng));
-        from.orientation = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+        const Pose from = random_pose(rng);
         const Vec3 on = from.position + from.orientation * glm::mix(line.points[0], line.points.back(), 0.5 * (u(rng) + 1.0));
         Vec3 a, b, c;
         small_triangle(rng, on + 3e-4 * Vec3(u(rng), u(rng), u(rng)), a, b, c);
