@@ -318,7 +318,8 @@ inline double triangle_motion(const OriginMotion& om, double distance, double rh
 }
 
 // A lower bound now on the distance between a piece and a triangle whose gap along the unit
-// direction n (from the triangle towards the piece) was `gap` at an earlier pose, the tool having
+// vector n of `direction` (any length, from the triangle towards the piece) was `gap` at an
+// earlier pose, the tool having
 // moved by `om` since: each point p of the piece moved by the origin's shift plus the turn of
 // p - o (o the origin then), which is at most the turn times `piece_radius`, so the piece's least
 // extent along n rose by at least n . shift less that and the triangle's most did not move. The

@@ -625,7 +625,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                                 prior_covers(model, k, at, *prior_frame, lower, upper, w);
         narrowed |= from_prior;
         const double prior_motion = from_prior ? motion_bound(piece, w.prior_pose, at) : 0.0;
-        const OriginMotion prior_turn = from_prior ? origin_motion(w.prior_pose, at) : OriginMotion{};
+        const OriginMotion prior_origin = from_prior ? origin_motion(w.prior_pose, at) : OriginMotion{};
         PieceNearCache* pc = use_cache && piece.capsule_count > 0 && !from_prior
                                  ? piece_superset(model, cache, k, at, axis, reach, tol)
                                  : nullptr;
@@ -686,8 +686,8 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                     const NearTri& q = w.prior[prior_cursor];
                     const double rho = rho_of(obj, q.tri), tri_reach = pr.of(rho);
                     // The motion since, the piece's or the triangle's (triangle_motion), whichever is less.
-                    const double m_lo = std::min(prior_motion, triangle_motion(prior_turn, q.lower_m, rho));
-                    const double m_hi = std::min(prior_motion, triangle_motion(prior_turn, q.upper_m, rho));
+                    const double m_lo = std::min(prior_motion, triangle_motion(prior_origin, q.lower_m, rho));
+                    const double m_hi = std::min(prior_motion, triangle_motion(prior_origin, q.upper_m, rho));
                     const Settled verdict = settle(q.lower_m, q.upper_m, m_lo, m_hi, tri_reach, tol);
                     if (verdict == Settled::Out) continue;
                     if (verdict == Settled::In) {
