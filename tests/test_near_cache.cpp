@@ -150,8 +150,8 @@ TEST(NearCache, InterleavedSessionsRepeatTheirLoneRuns) {
     EXPECT_EQ(first_difference(with_copy, alone_first), -1);
 }
 
-// box_motion_bound: no point within the radius of the tool's origin moves further from the earlier
-// pose to any pose of the box than the bound, for boxes and earlier poses of every lay-out the
+// box_motion: no point within the radius of the tool's origin moves further from the earlier pose
+// to any pose of the box than its move plus its turn times the radius, for boxes and earlier poses of every lay-out the
 // passes of a tick meet (turns of the box against the way from there included), and the bound is
 // not loose by more than a small factor.
 TEST(BoxMotionBound, NoPointOfTheBoxMovesFurther) {
@@ -181,7 +181,8 @@ TEST(BoxMotionBound, NoPointOfTheBoxMovesFurther) {
             lower[j] = std::min(a, b);
             upper[j] = std::max(a, b);
         }
-        const double bound = box_motion_bound(radius, from, at, frame, lower, upper);
+        const BoxMotion motion = box_motion(from, at, frame, lower, upper);
+        const double bound = motion.move_m + motion.turn * radius;
         ASSERT_TRUE(std::isfinite(bound)) << "trial " << trial;
         double most = 0.0;
         for (int i = 0; i < 200; ++i) {
@@ -211,7 +212,8 @@ TEST(BoxMotionBound, NoPointOfTheBoxMovesFurther) {
 TEST(BoxMotionBound, LargeTurnsGiveNoBound) {
     Pose from, at;
     const double lower[6] = {0, 0, 0, -0.2, 0, 0}, upper[6] = {0, 0, 0, 0.2, 0, 0};
-    EXPECT_TRUE(std::isinf(box_motion_bound(0.01, from, at, Mat3(1.0), lower, upper)));
+    const BoxMotion motion = box_motion(from, at, Mat3(1.0), lower, upper);
+    EXPECT_TRUE(std::isinf(motion.move_m + motion.turn * 0.01));
 }
 
 namespace {

@@ -109,7 +109,7 @@ struct NearCache {
     uint64_t origin_for[kNearCacheSlots] = {};
     PieceNearCache piece[kMaxToolPieces];
     int32_t table[kNearCacheHash];  // (object, triangle) -> index in the superset being replaced
-    SupersetBuild build;                         // at most one in progress
+    SupersetBuild build;            // at most one in progress
 };
 
 // How far no point of `piece` moves between poses `from` and `to`: its centre's displacement plus
@@ -149,14 +149,6 @@ inline BoxMotion box_motion(const Pose& from, const Pose& at, const Mat3& frame,
     if (!(turn <= 0.1) || !(turned <= 0.1)) return {inf, inf};
     const double angle = std::sqrt(shifted_turn2) + turned * turn;
     return {std::sqrt(move2) * (1.0 + 1e-9) + 1e-12, angle * (1.0 + 1e-9)};
-}
-
-// How far no point within `radius` of the tool's origin moves from pose `from` to any pose of the
-// box (box_motion).
-inline double box_motion_bound(double radius, const Pose& from, const Pose& at, const Mat3& frame,
-                               const double lower[6], const double upper[6]) {
-    const BoxMotion b = box_motion(from, at, frame, lower, upper);
-    return b.move_m + b.turn * radius;
 }
 
 // How far a piece reaches within a box of the step's coordinates, as a whole and for one triangle.
@@ -247,12 +239,18 @@ inline void near_cache_begin(NearCache& c, const Model& model, const Pose& pose)
     c.ring_stamp[slot] = c.stamp;
 }
 
+// The ring's slot of the pose of `stamp`; -1 when that pose is no longer kept.
+inline int near_cache_slot(const NearCache& c, uint64_t stamp) {
+    if (stamp == 0 || stamp > c.stamp || c.stamp - stamp >= uint64_t(kNearCacheSlots)) return -1;
+    const int slot = int(stamp % kNearCacheSlots);
+    return c.ring_stamp[slot] == stamp ? slot : -1;
+}
+
 // How far no point of piece k (of `model`) moved from the pose of `stamp` to the current one;
 // false when that pose is no longer kept.
 inline bool near_cache_motion(NearCache& c, const Model& model, uint64_t stamp, size_t k, double& motion) {
-    if (stamp == 0 || stamp > c.stamp || c.stamp - stamp >= uint64_t(kNearCacheSlots)) return false;
-    const int slot = int(stamp % kNearCacheSlots);
-    if (c.ring_stamp[slot] != stamp) return false;
+    const int slot = near_cache_slot(c, stamp);
+    if (slot < 0) return false;
     if (c.motion_for[slot][k] != c.stamp) {
         c.motion_m[slot][k] = motion_bound(model.tool.pieces[k], c.ring[slot], c.ring[c.stamp % kNearCacheSlots]);
         c.motion_for[slot][k] = c.stamp;
@@ -291,9 +289,8 @@ inline OriginMotion origin_motion(const Pose& from, const Pose& to) {
 // The tool's motion from the pose of `stamp` to the current one; false when that pose is no longer
 // kept.
 inline bool near_cache_origin_motion(NearCache& c, uint64_t stamp, OriginMotion& motion) {
-    if (stamp == 0 || stamp > c.stamp || c.stamp - stamp >= uint64_t(kNearCacheSlots)) return false;
-    const int slot = int(stamp % kNearCacheSlots);
-    if (c.ring_stamp[slot] != stamp) return false;
+    const int slot = near_cache_slot(c, stamp);
+    if (slot < 0) return false;
     if (c.origin_for[slot] != c.stamp) {
         const OriginMotion m = origin_motion(c.ring[slot], c.ring[c.stamp % kNearCacheSlots]);
         c.origin_shift[slot] = m.shift;
@@ -324,13 +321,11 @@ inline double triangle_motion(const OriginMotion& om, double distance, double rh
 // p - o (o the origin then), which is at most the turn times `piece_radius`, so the piece's least
 // extent along n rose by at least n . shift less that and the triangle's most did not move. The
 // gap along n bounds the distance below. With room for the rounding of placing the tool at
-// either pose, as OriginMotion::bound's. -1e300 for a zero direction.
+// either pose (OriginMotion::bound's, less the move it counts). -1e300 for a zero direction.
 inline double direction_lower_bound(const OriginMotion& om, const Vec3& direction, double gap, double piece_radius) {
     const double len = glm::length(direction);
     if (!(len > 0.0) || !(gap > -1e299)) return -1e300;
-    const double turned = om.turn * piece_radius;
-    return gap + glm::dot(direction, om.shift) / len - turned - (om.move_m + turned) * 1e-9 - 1e-12 -
-           1e-13 * (om.move_m + piece_radius);
+    return gap + glm::dot(direction, om.shift) / len - (om.bound(piece_radius) - om.move_m);
 }
 
 inline uint32_t near_cache_hash(uint16_t object, uint32_t tri) {
@@ -352,10 +347,7 @@ inline uint32_t near_cache_table_mask(int count) {
 inline void near_cache_index(NearCache& c, const PieceNearCache& pc, uint32_t mask) {
     std::memset(c.table, 0xff, sizeof(int32_t) * (mask + 1));
     for (int i = 0; i < pc.count; ++i) {
-        const uint64_t stamp = pc.entries[i].stamp;
-        if (stamp == 0 || stamp > c.stamp || c.stamp - stamp >= uint64_t(kNearCacheSlots) ||
-            c.ring_stamp[stamp % kNearCacheSlots] != stamp)
-            continue;
+        if (near_cache_slot(c, pc.entries[i].stamp) < 0) continue;
         uint32_t h = near_cache_hash(pc.object[i], pc.entries[i].tri) & mask;
         while (c.table[h] >= 0) h = (h + 1) & mask;
         c.table[h] = i;

@@ -196,17 +196,13 @@ struct Workspace {
     // pose detect ran at (the pass's base; the last detect was complete, not narrowed from an
     // earlier one).
     bool near_complete = false;
-    double near_reach[kMaxToolPieces] = {};
-    double near_move[kMaxToolPieces] = {};  // the box's translation and turn behind near_reach
-    double near_turn[kMaxToolPieces] = {};
+    PieceReach near_reach[kMaxToolPieces];
     // A complete near set of an earlier pass of the tick, which a later pass narrows where it
     // covers the pass's box (prior_* as near_* above).
     NearTri prior[kMaxNear];
     int prior_count = 0;
     Pose prior_pose;
-    double prior_reach[kMaxToolPieces] = {};
-    double prior_move[kMaxToolPieces] = {};
-    double prior_turn[kMaxToolPieces] = {};
+    PieceReach prior_reach[kMaxToolPieces];
     int tests = 0;  // triangle tests of this tick (StepStats::triangles_tested)
     FeatureKey feats[kMaxFeatures];
     int feat_count = 0;
@@ -554,14 +550,13 @@ PieceNearCache* piece_superset(const Model& model, NearCache& c, size_t k, const
 // every u in [min(radius, prior reach), radius], that is at both ends.
 bool prior_covers(const Model& model, size_t k, const Pose& at, const Mat3& frame, const double lower[6],
                   const double upper[6], const Workspace& w) {
-    const RendererSettings& S = model.settings;
+    const PieceReach& prior = w.prior_reach[k];
     const double radius = model.tool.pieces[k].radius_m;
     const BoxMotion b = box_motion(w.prior_pose, at, frame, lower, upper);
-    const double need = b.move_m + b.turn * radius + S.contact_distance_m + 20.0 * S.constraint_tol_m;
-    if (!(need <= w.prior_reach[k])) return false;
-    const double move = w.prior_move[k], turn = w.prior_turn[k];
-    for (const double u : {std::min(radius, w.prior_reach[k]), radius})
-        if (!(b.move_m + b.turn * u <= move + turn * (u + move))) return false;
+    const double need = b.move_m + b.turn * radius + prior.contact + prior.room;
+    if (!(need <= prior.reach)) return false;
+    for (const double u : {std::min(radius, prior.reach), radius})
+        if (!(b.move_m + b.turn * u <= prior.move + prior.turn * (u + prior.move))) return false;
     return true;
 }
 
@@ -609,9 +604,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
         // How far this piece's points can move within the box.
         const PieceReach pr = piece_reach(model.settings, piece.radius_m, at.position, lower, upper);
         const double reach = pr.reach;
-        w.near_reach[k] = reach;
-        w.near_move[k] = pr.move;
-        w.near_turn[k] = pr.turn;
+        w.near_reach[k] = pr;
         // How far a triangle's vertices are from the tool's origin (PieceReach::rho).
         auto rho_of = [&](const ModelObject& obj, uint32_t tri) {
             const auto& t = obj.mesh.triangles[tri];
@@ -749,10 +742,9 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                             if (rebase) {
                                 // The gap along the direction, where it was not measured, no less
                                 // than the motion leaves of it.
-                                e.direction_gap = kept ? std::max(along, direction_lower_bound(om, e.direction,
-                                                                                              e.direction_gap,
-                                                                                              piece.radius_m))
-                                                       : -1e300;
+                                e.direction_gap =
+                                    kept ? direction_lower_bound(om, e.direction, e.direction_gap, piece.radius_m)
+                                         : -1e300;
                                 e.lo -= m_lo;
                                 if (e.hi < 1e300) e.hi += m_hi;
                                 e.stamp = cache.stamp;
@@ -2226,8 +2218,6 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             w.prior_count = w.near_count;
             w.prior_pose = base;
             std::copy(w.near_reach, w.near_reach + kMaxToolPieces, w.prior_reach);
-            std::copy(w.near_move, w.near_move + kMaxToolPieces, w.prior_move);
-            std::copy(w.near_turn, w.near_turn + kMaxToolPieces, w.prior_turn);
             have_prior = true;
         }
         if (pass > 0) {
