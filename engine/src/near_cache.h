@@ -52,16 +52,20 @@ struct PieceNearCache {
     bool valid = false;
     Pose pose;              // where the superset was gathered
     double radius_m = 0.0;  // every triangle within this of the piece there is in it
+    // At its last use: how much further than the tick's need it reached, and the margin a new
+    // superset gets (m).
+    double room_m = 0.0, margin_m = 0.0;
     int count = 0;          // entries, grouped by object in object order
-    NearCacheEntry entries[kNearCacheEntries];
+    // kNearCacheEntries of them (NearCache's pool: an install swaps them with the build's).
+    NearCacheEntry* entries = nullptr;
     // Per entry, its object (entries[i].object): the walk over the entries finds each object's run
     // here without touching an entry's line of memory for every one it skips.
     uint16_t object[kNearCacheEntries];
     // Per entry, when it needs a look again: the lower bound on its triangle's distance from the
     // piece when it was last looked at, plus the piece's path then. `due` less the path now bounds
     // the distance now from below; while that exceeds the reach (and the tolerance), the triangle
-    // stays out of reach and the entry is skipped.
-    double due[kNearCacheEntries];
+    // stays out of reach and the entry is skipped. kNearCacheEntries of them, as `entries`.
+    double* due = nullptr;
 };
 
 // A piece's next superset, gathered a slice per tick while the current one still holds, so that
@@ -77,9 +81,13 @@ struct SupersetBuild {
     Vec3 axis[kToolCapsules + 1];  // the piece's capsule chain at `pose`
     size_t object = 0;             // the object being walked
     bool walking = false;          // its walk has started
+    bool complete = false;         // every object walked: ready to install
     CapsuleChainWalk walk;
     int count = 0;
-    NearCacheEntry entries[kNearCacheEntries];
+    // kNearCacheEntries each, from NearCache's pool; on install they become the piece's, and
+    // the piece's old ones the next build's.
+    NearCacheEntry* entries = nullptr;
+    double* due = nullptr;  // install's PieceNearCache::due for them
 };
 
 struct NearCache {
@@ -110,6 +118,21 @@ struct NearCache {
     PieceNearCache piece[kMaxToolPieces];
     int32_t table[kNearCacheHash];  // (object, triangle) -> index in the superset being replaced
     SupersetBuild build;            // at most one in progress
+    // The entries and dues of the pieces and the build: an install trades the build's for the
+    // piece's instead of copying them.
+    NearCacheEntry entry_pool[kMaxToolPieces + 1][kNearCacheEntries];
+    double due_pool[kMaxToolPieces + 1][kNearCacheEntries];
+
+    NearCache() {
+        for (int k = 0; k < kMaxToolPieces; ++k) {
+            piece[k].entries = entry_pool[k];
+            piece[k].due = due_pool[k];
+        }
+        build.entries = entry_pool[kMaxToolPieces];
+        build.due = due_pool[kMaxToolPieces];
+    }
+    NearCache(const NearCache&) = delete;
+    NearCache& operator=(const NearCache&) = delete;
 };
 
 // How far no point of `piece` moves between poses `from` and `to`: its centre's displacement plus

@@ -204,6 +204,7 @@ struct Workspace {
     Pose prior_pose;
     PieceReach prior_reach[kMaxToolPieces];
     int tests = 0;  // triangle tests of this tick (StepStats::triangles_tested)
+    int detect_tests = 0;  // detect's distance tests of this tick (judge_near)
     FeatureKey feats[kMaxFeatures];
     int feat_count = 0;
     bool gather_full = false;  // an atom or feature of this gather did not fit
@@ -418,6 +419,7 @@ void start_superset(NearCache& c, size_t k, const Pose& at, const Vec3* axis, do
     for (int j = 0; j <= kToolCapsules; ++j) b.axis[j] = axis[j];
     b.object = 0;
     b.walking = false;
+    b.complete = false;
     b.count = 0;
 }
 
@@ -478,19 +480,23 @@ void install_superset(const Model& model, NearCache& c) {
     near_cache_index(c, pc, mask);
     double built_motion = 0.0;
     const bool built_known = near_cache_motion(c, model, b.stamp, b.piece, built_motion);
+    // When each entry needs a look (PieceNearCache::due): by its lower bound and the path where
+    // that held, or the old entry's due where that is later (both bound the distance from below
+    // along the same path), so that the far entries of a new superset are not all read at once.
+    double* const due = b.due;
     for (int i = 0; i < b.count; ++i) {
         NearCacheEntry& e = b.entries[i];
         const NearCacheEntry* p = near_cache_find(c, pc, mask, e.object, e.tri);
         double m = 0.0;
+        const double old_due = p ? pc.due[p - pc.entries] : -1e300;
         if (p && (p->hi < 1e300 || !built_known ||
                   (near_cache_motion(c, model, p->stamp, b.piece, m) && p->lo - m > e.lo - built_motion)))
             e = *p;
+        due[i] = std::max(old_due, e.lo + e.path_m);
     }
-    std::copy(b.entries, b.entries + b.count, pc.entries);
-    for (int i = 0; i < b.count; ++i) {
-        pc.object[i] = b.entries[i].object;
-        pc.due[i] = -1e300;  // looked at on the next tick
-    }
+    std::swap(pc.entries, b.entries);
+    std::swap(pc.due, b.due);
+    for (int i = 0; i < b.count; ++i) pc.object[i] = pc.entries[i].object;
     pc.count = b.count;
     pc.valid = true;
     pc.pose = b.pose;
@@ -500,11 +506,15 @@ void install_superset(const Model& model, NearCache& c) {
 
 // Work per tick on a superset in progress (boxes and triangles looked at): about 15 us.
 constexpr long kSupersetSlice = 384;
+// Distance tests in detect that make a tick heavy (tend_superset): about a tenth of the ticks in
+// contact on the bench's dense wedge have more.
+constexpr int kHeavyDetectTests = 64;
 
 // Piece k's superset for a tick of reach `reach` at pose `at` (capsules `axis`): the current one
 // while it holds, the one in progress once complete, and a new one gathered at once when neither
-// holds. A new one is started in slices once the tool has used 40 % of the margin. Null when a
-// superset does not fit (the caller measures from scratch).
+// holds. A new one is started once the tool has used 40 % of the margin, and gathered in slices
+// at the ends of ticks (tend_superset). Null when a superset does not fit (the caller measures
+// from scratch).
 PieceNearCache* piece_superset(const Model& model, NearCache& c, size_t k, const Pose& at, const Vec3* axis,
                                double reach, double tol) {
     PieceNearCache& pc = c.piece[k];
@@ -517,16 +527,15 @@ PieceNearCache* piece_superset(const Model& model, NearCache& c, size_t k, const
     if (b.active && b.piece == k) {
         if (!(room(b.pose, b.radius_m) > 0.0)) {
             b.active = false;  // the tool went past it: dropped
-        } else if (advance_superset(model, c, current > 0.0 ? kSupersetSlice : std::numeric_limits<long>::max())) {
+        } else if (!(current > 0.0) && advance_superset(model, c, std::numeric_limits<long>::max())) {
             install_superset(model, c);
             current = room(pc.pose, pc.radius_m);
         }
     }
     if (current > 0.0) {
-        if (!b.active && current < 0.6 * margin) {
-            start_superset(c, k, at, axis, need + margin);
-            if (advance_superset(model, c, kSupersetSlice)) install_superset(model, c);
-        }
+        pc.room_m = current;
+        pc.margin_m = margin;
+        if (!b.active && current < 0.6 * margin) start_superset(c, k, at, axis, need + margin);
         return &pc;
     }
     start_superset(c, k, at, axis, need + margin);
@@ -536,6 +545,18 @@ PieceNearCache* piece_superset(const Model& model, NearCache& c, size_t k, const
     }
     install_superset(model, c);
     return &pc;
+}
+
+// At the end of a tick: a slice of the superset in progress, or its install once complete. A heavy
+// tick (another pass, a release, many distance tests in detect) leaves it to a lighter one while
+// the current superset has a third of its margin left, so that the two costs seldom meet.
+void tend_superset(const Model& model, NearCache& c, bool heavy) {
+    SupersetBuild& b = c.build;
+    if (!b.active) return;
+    const PieceNearCache& pc = c.piece[b.piece];
+    if (heavy && pc.valid && pc.room_m > 0.3 * pc.margin_m) return;
+    if (b.complete) install_superset(model, c);
+    else b.complete = advance_superset(model, c, kSupersetSlice);
 }
 
 // Whether the earlier pass's complete near set (Workspace::prior) holds every triangle piece k can
@@ -687,6 +708,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                         if (!keep_settled(q.tri, q.lower_m, q.upper_m, m_lo, m_hi, q.direction, q.simplex)) break;
                         continue;
                     }
+                    ++w.detect_tests;
                     const NearVerdict v =
                         judge_near(model, k, view, axis, obj, q.tri, tri_reach, tol, false, 2.0 * reach, &q.direction,
                                    &q.simplex);
@@ -753,6 +775,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                             continue;
                         }
                     }
+                    ++w.detect_tests;
                     const NearVerdict v =
                         judge_near(model, k, view, axis, obj, e.tri, tri_reach, tol, false, 2.0 * reach, &e.direction,
                                    &e.simplex);
@@ -773,6 +796,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                 // when GJK finds it within reach of the piece itself.
                 obj.bvh.query_capsule_chain(axis, piece.capsule_radii_m.data(), piece.capsule_count, reach,
                                             [&](uint32_t tri) {
+                                                ++w.detect_tests;
                                                 const NearVerdict v = judge_near(model, k, view, axis, obj, tri,
                                                                                  pr.of(rho_of(obj, tri)), tol, any_only);
                                                 return v.keep ? keep(tri, v.lo, v.hi, v.direction, v.simplex) : true;
@@ -2158,6 +2182,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     const RendererSettings& S = model.settings;
     StepResult res;
     w.tests = 0;
+    w.detect_tests = 0;
 
     // Input health: a non-finite or non-unit pose is refused; the last pose is kept.
     const double qn = glm::length(haptic_in.orientation);
@@ -2368,6 +2393,12 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
         }
         if (!solved || free_motion || !check_contacts(model, base, x_sol, w).any_virtual) break;
         ++res.stats.passes;
+    }
+    if (model.settings.near_cache) {
+        // The superset in progress gets its slice where this tick has room for it.
+        const auto t0 = Clock::now();
+        tend_superset(model, cache, res.stats.passes > 0 || res.stats.released || w.detect_tests >= kHeavyDetectTests);
+        stage_detect += micros(t0, Clock::now());
     }
     bool base_stands = false;
     if (!solved && res.stats.passes > 0) {
