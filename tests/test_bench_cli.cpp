@@ -125,8 +125,8 @@ TEST_F(Bench, JsonHasTheDocumentedFieldsAndNoAllocations) {
 }
 
 TEST_F(Bench, TicksCsvHasOneRowPerStepAndNoChecksWhenAskedNone) {
-    const fs::path ticks = dir / "ticks", file = dir / "bench.json";
-    fs::create_directories(ticks);
+    // The ticks' directory is made where it does not exist yet.
+    const fs::path ticks = dir / "ticks" / "nested", file = dir / "bench.json";
     const Outcome o = run_cli("bench paper/cavity_1mm --check-every 0 --ticks " + ticks.string() + " --json " +
                                   file.string(),
                               dir);
@@ -168,7 +168,10 @@ TEST_F(Bench, BadArgumentsExitTwoWithOneLine) {
     expect_bad("bench paper/cavity_0mm --frobnicate", "--frobnicate");
     expect_bad("bench paper/cavity_0mm --peer nope", "nope");
     expect_bad("bench paper/cavity_0mm --check-every x", "--check-every");
-    expect_bad("bench paper/cavity_0mm --ticks " + (dir / "no" / "such").string(), "cannot write");
+    // A directory that cannot be made (under a file) is refused before any scene runs.
+    const fs::path file = dir / "a_file";
+    std::ofstream(file) << "x";
+    expect_bad("bench paper/cavity_0mm --ticks " + (file / "ticks").string(), "cannot create");
 }
 
 TEST_F(Bench, PeerFclReportsARatio) {

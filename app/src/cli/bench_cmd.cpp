@@ -167,6 +167,16 @@ int cmd_bench(const std::vector<std::string>& args) {
         for (const std::string& n : bench_scene_names()) std::printf("%s\n", n.c_str());
         return kOk;
     }
+    if (!ticks_dir.empty()) {
+        // Made before any scene runs, so that a bad directory costs no run.
+        std::error_code ec;
+        std::filesystem::create_directories(ticks_dir, ec);
+        if (ec || !std::filesystem::is_directory(ticks_dir)) {
+            std::fprintf(stderr, "sulcus-cli: bench: %s: cannot create: %s\n", ticks_dir.c_str(),
+                         ec ? ec.message().c_str() : "not a directory");
+            return kUsage;
+        }
+    }
     nlohmann::json out;
     out["machine"] = machine_json();
     out["scenes"] = nlohmann::json::array();
