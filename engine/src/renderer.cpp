@@ -549,10 +549,12 @@ PieceNearCache* piece_superset(const Model& model, NearCache& c, size_t k, const
 
 // At the end of a tick: a slice of the superset in progress, or its install once complete. A heavy
 // tick (another pass, a release, many distance tests in detect) leaves it to a lighter one while
-// the current superset has a third of its margin left, so that the two costs seldom meet.
+// the current superset had a third of its margin left at its last use, so that the two costs
+// seldom meet. Nothing for a build of another model (a tick that never reached the cache's
+// check of the model, near_cache_begin).
 void tend_superset(const Model& model, NearCache& c, bool heavy) {
     SupersetBuild& b = c.build;
-    if (!b.active) return;
+    if (!b.active || c.model_serial != model.serial) return;
     const PieceNearCache& pc = c.piece[b.piece];
     if (heavy && pc.valid && pc.room_m > 0.3 * pc.margin_m) return;
     if (b.complete) install_superset(model, c);
