@@ -329,6 +329,59 @@ void gjk_brackets_the_distance(const TriMesh& tool_mesh, double scale, unsigned 
     EXPECT_GT(touching_close, 50);
 }
 
+// With no iterations, the last search's direction and simplex taken at a nearby pose still
+// bracket the distance there, and tightly for a small motion: the gap along the direction below,
+// the nearer of the direction's point and the simplex's closest point above. A made-up simplex
+// or none still gives bounds that hold.
+TEST(Gjk, WithoutIterationsTheLastDirectionAndSimplexBracketTheDistance) {
+    PlacedTool pt(make_probe_tip_collision(ProbeKind::Williams));
+    ASSERT_TRUE(pt.mb.model) << pt.mb.error;
+    const ModelTool& tool = *pt.tool;
+    const auto* tris = piece_triangles(tool, 0);
+    const double scale = 1e-3;
+    std::mt19937 rng(12);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int separated = 0, tight = 0;
+    for (int t = 0; t < 2000; ++t) {
+        const Quat q = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+        const Vec3 p(u(rng) * scale, u(rng) * scale, u(rng) * scale);
+        pt.place(q, p);
+        const Vec3 c = pt.verts[size_t(rng() % pt.verts.size())] + 0.05 * scale * Vec3(u(rng), u(rng), u(rng));
+        const double s = scale * std::pow(10.0, -2.0 + 1.5 * (u(rng) + 1.0) / 2.0);
+        const Vec3 a = c + s * Vec3(u(rng), u(rng), u(rng)), b = c + s * Vec3(u(rng), u(rng), u(rng)),
+                   d = c + s * Vec3(u(rng), u(rng), u(rng));
+        const DistanceBounds before =
+            convex_triangle_distance(pt.view(true), a, b, d, 1e300, 1e-13, 64, nullptr, nullptr);
+        // A motion of up to 10 um and 1 mrad.
+        const double step = 1e-5 * (u(rng) + 1.0) / 2.0;
+        pt.place(glm::normalize(Quat(1.0, 5e-4 * u(rng), 5e-4 * u(rng), 5e-4 * u(rng)) * q),
+                 p + step * glm::normalize(Vec3(u(rng), u(rng), u(rng))));
+        const ConvexView view = pt.view(true);
+        const double exact = distance_convex_triangle_by_faces(view, tris, int(tool.mesh.triangles.size()), a, b, d);
+        const Vec3* hint = glm::dot(before.direction, before.direction) > 0.0 ? &before.direction : nullptr;
+        const DistanceBounds quick = convex_triangle_distance(view, a, b, d, 1e300, 1e-13, 0, hint, &before.simplex);
+        ASSERT_LE(quick.lower, exact + 1e-13) << "trial " << t;
+        ASSERT_GE(quick.upper, exact) << "trial " << t;
+        if (exact > 0.0) {
+            ++separated;
+            tight += quick.upper - quick.lower <= 1e-5;
+        }
+        GjkSimplex junk;
+        junk.count = uint8_t(rng() % 5);
+        for (int i = 0; i < 4; ++i) {
+            junk.tri[i] = uint8_t(rng() % 4);
+            junk.poly[i] = uint16_t(rng() % (pt.verts.size() + 3));
+        }
+        for (const GjkSimplex* warm : {static_cast<const GjkSimplex*>(&junk), static_cast<const GjkSimplex*>(nullptr)}) {
+            const DistanceBounds w = convex_triangle_distance(view, a, b, d, 1e300, 1e-13, 0, nullptr, warm);
+            ASSERT_LE(w.lower, exact + 1e-13) << "trial " << t;
+            ASSERT_GE(w.upper, exact) << "trial " << t;
+        }
+    }
+    EXPECT_GT(separated, 500);
+    EXPECT_GT(tight, separated * 95 / 100);  // within 10 um (most within 1 um)
+}
+
 TEST(Gjk, BoundsBracketTheExactDistanceOnABox) { gjk_brackets_the_distance(make_box(Vec3(1e-3, 2e-3, 0.5e-3)), 2e-3, 8); }
 
 TEST(Gjk, BoundsBracketTheExactDistanceOnProbeTips) {

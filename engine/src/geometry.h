@@ -193,7 +193,10 @@ struct DistanceBounds {
 };
 // `hint`, when given, is a direction roughly from the triangle towards the polytope: the search
 // starts there; `warm`, when it has points, is the simplex an earlier search ended on (indices
-// out of range are ignored).
+// out of range are ignored). With max_iterations 0 there is no search: the bounds are the gap
+// along the hint (0 without one) and the distance of the nearer of the hint's point of D and the
+// warm simplex's closest point, a few hundred operations, tight for a pair that has hardly moved
+// since the search that gave the hint and the simplex.
 DistanceBounds convex_triangle_distance(const Vec3* poly, int count, const Vec3& a, const Vec3& b, const Vec3& c,
                                         double cutoff = 1e300, double tolerance = 1e-13, int max_iterations = 64,
                                         const Vec3* hint = nullptr, const GjkSimplex* warm = nullptr);

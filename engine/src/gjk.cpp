@@ -200,6 +200,14 @@ DistanceBounds distance_bounds(const ConvexView& poly, const Vec3& a, const Vec3
             }
         }
     }
+    if (max_iterations <= 0) {
+        // No search: the hint's gap below, and above the nearer of the hint's point and the
+        // earlier simplex's closest point (points of D, with room for the rounding of taking
+        // them at this pose).
+        r.upper = glm::length(v) * (1.0 + 1e-12) + 1e-15;
+        r.simplex = names_of(s);
+        return r;
+    }
     for (int it = 0; it < max_iterations; ++it) {
         r.iterations = it + 1;
         r.simplex = names_of(s);

@@ -710,6 +710,23 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                         if (!keep_settled(q.tri, q.lower_m, q.upper_m, m_lo, m_hi, q.direction, q.simplex)) break;
                         continue;
                     }
+                    // Left open, the earlier pass's direction and simplex taken at this base
+                    // (a search of no iterations) mostly settle it: that pass's answer moved the
+                    // tool a few micrometres, which the motion's bound makes nearly half the reach.
+                    // The lower bound is this base's, so the guard starts from it.
+                    if (glm::dot(q.direction, q.direction) > 0.0 || q.simplex.count > 0) {
+                        const auto& t = obj.mesh.triangles[q.tri];
+                        const bool hinted = glm::dot(q.direction, q.direction) > 0.0;
+                        const DistanceBounds b = convex_triangle_distance(
+                            view, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]], 1e300, tol,
+                            0, hinted ? &q.direction : nullptr, q.simplex.count > 0 ? &q.simplex : nullptr);
+                        const double lo = std::max(b.lower, q.lower_m - m_lo);
+                        if (lo > tri_reach + tol) continue;
+                        if (b.upper <= tri_reach) {
+                            keep(q.tri, lo, b.upper, q.direction, b.simplex.count > 0 ? b.simplex : q.simplex);
+                            continue;
+                        }
+                    }
                     ++w.detect_tests;
                     const NearVerdict v =
                         judge_near(model, k, view, axis, obj, q.tri, tri_reach, tol, false, 2.0 * reach, &q.direction,
