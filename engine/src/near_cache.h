@@ -79,9 +79,8 @@ struct SupersetBuild {
     double path_m = 0.0;  // the piece's path there
     double radius_m = 0.0;
     Vec3 axis[kToolCapsules + 1];  // the piece's capsule chain at `pose`
-    size_t object = 0;             // the object being walked
+    size_t object = 0;             // the object being walked; the objects' count once complete
     bool walking = false;          // its walk has started
-    bool complete = false;         // every object walked: ready to install
     CapsuleChainWalk walk;
     int count = 0;
     // kNearCacheEntries each, from NearCache's pool; on install they become the piece's, and

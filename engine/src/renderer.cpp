@@ -419,7 +419,6 @@ void start_superset(NearCache& c, size_t k, const Pose& at, const Vec3* axis, do
     for (int j = 0; j <= kToolCapsules; ++j) b.axis[j] = axis[j];
     b.object = 0;
     b.walking = false;
-    b.complete = false;
     b.count = 0;
 }
 
@@ -483,7 +482,6 @@ void install_superset(const Model& model, NearCache& c) {
     // When each entry needs a look (PieceNearCache::due): by its lower bound and the path where
     // that held, or the old entry's due where that is later (both bound the distance from below
     // along the same path), so that the far entries of a new superset are not all read at once.
-    double* const due = b.due;
     for (int i = 0; i < b.count; ++i) {
         NearCacheEntry& e = b.entries[i];
         const NearCacheEntry* p = near_cache_find(c, pc, mask, e.object, e.tri);
@@ -492,7 +490,7 @@ void install_superset(const Model& model, NearCache& c) {
         if (p && (p->hi < 1e300 || !built_known ||
                   (near_cache_motion(c, model, p->stamp, b.piece, m) && p->lo - m > e.lo - built_motion)))
             e = *p;
-        due[i] = std::max(old_due, e.lo + e.path_m);
+        b.due[i] = std::max(old_due, e.lo + e.path_m);
     }
     std::swap(pc.entries, b.entries);
     std::swap(pc.due, b.due);
@@ -557,8 +555,9 @@ void tend_superset(const Model& model, NearCache& c, bool heavy) {
     if (!b.active || c.model_serial != model.serial) return;
     const PieceNearCache& pc = c.piece[b.piece];
     if (heavy && pc.valid && pc.room_m > 0.3 * pc.margin_m) return;
-    if (b.complete) install_superset(model, c);
-    else b.complete = advance_superset(model, c, kSupersetSlice);
+    // Walked to its end by the last slice: installed now, the walk's tick having had its slice.
+    if (b.object >= model.objects.size()) install_superset(model, c);
+    else advance_superset(model, c, kSupersetSlice);
 }
 
 // Whether the earlier pass's complete near set (Workspace::prior) holds every triangle piece k can
@@ -714,9 +713,9 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                     // (a search of no iterations) mostly settle it: that pass's answer moved the
                     // tool a few micrometres, which the motion's bound makes nearly half the reach.
                     // The lower bound is this base's, so the guard starts from it.
-                    if (glm::dot(q.direction, q.direction) > 0.0 || q.simplex.count > 0) {
+                    const bool hinted = glm::dot(q.direction, q.direction) > 0.0;
+                    if (hinted || q.simplex.count > 0) {
                         const auto& t = obj.mesh.triangles[q.tri];
-                        const bool hinted = glm::dot(q.direction, q.direction) > 0.0;
                         const DistanceBounds b = convex_triangle_distance(
                             view, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]], 1e300, tol,
                             0, hinted ? &q.direction : nullptr, q.simplex.count > 0 ? &q.simplex : nullptr);
