@@ -382,6 +382,87 @@ TEST(Gjk, WithoutIterationsTheLastDirectionAndSimplexBracketTheDistance) {
     EXPECT_GT(tight, separated * 95 / 100);  // within 10 um (most within 1 um)
 }
 
+// The check of a separation against a floor: whatever it returns is a lower bound on the
+// separation (the distance when apart, the overlap's negative by the separating-axis test when
+// not), its upper bound holds, and a floor under the separation of a pair that has moved a little
+// since the search that gave the hint is met. A floor below zero (an overlap allowed) is met
+// along the hint by a pair resting in contact, with no search: the case the guard's check at a
+// new pose is about.
+TEST(Gjk, TheSeparationCheckBoundsTheSeparationAndMeetsAFloorUnderIt) {
+    PlacedTool pt(make_probe_tip_collision(ProbeKind::Williams));
+    ASSERT_TRUE(pt.mb.model) << pt.mb.error;
+    const ModelTool& tool = *pt.tool;
+    const auto* tris = piece_triangles(tool, 0);
+    const int face_count = int(pt.normals.size());
+    const double scale = 1e-3;
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int apart = 0, met = 0, resting = 0, resting_at_once = 0;
+    for (int t = 0; t < 3000; ++t) {
+        const Quat q = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+        const Vec3 p(u(rng) * scale, u(rng) * scale, u(rng) * scale);
+        pt.place(q, p);
+        // Every third trial a triangle lying on a face plane of the tool within +-0.1 um (the tool
+        // resting on it, or just into it), else one near a vertex.
+        Vec3 a, b, d;
+        const bool on_face = t % 3 == 0;
+        if (on_face) {
+            const int f = int(rng() % uint32_t(face_count));
+            const Vec3 n = pt.normals[size_t(f)];
+            const Vec3 c = pt.verts[size_t(rng() % pt.verts.size())];
+            const double s = 0.05 * scale;
+            a = c + s * Vec3(u(rng), u(rng), u(rng));
+            b = c + s * Vec3(u(rng), u(rng), u(rng));
+            d = c + s * Vec3(u(rng), u(rng), u(rng));
+            const double height = 1e-7 * u(rng);
+            for (Vec3* x : {&a, &b, &d}) *x += (pt.offsets[size_t(f)] + height - glm::dot(n, *x)) * n;
+        } else {
+            const Vec3 c = pt.verts[size_t(rng() % pt.verts.size())] + 0.05 * scale * Vec3(u(rng), u(rng), u(rng));
+            const double s = scale * std::pow(10.0, -2.0 + 1.5 * (u(rng) + 1.0) / 2.0);
+            a = c + s * Vec3(u(rng), u(rng), u(rng));
+            b = c + s * Vec3(u(rng), u(rng), u(rng));
+            d = c + s * Vec3(u(rng), u(rng), u(rng));
+        }
+        const DistanceBounds before = convex_triangle_distance(pt.view(true), a, b, d, 1e300, 1e-13, 64, nullptr, nullptr);
+        // A motion of up to 0.1 um and 10 urad since.
+        const double step = 1e-7 * (u(rng) + 1.0) / 2.0;
+        pt.place(glm::normalize(Quat(1.0, 5e-6 * u(rng), 5e-6 * u(rng), 5e-6 * u(rng)) * q),
+                 p + step * glm::normalize(Vec3(u(rng), u(rng), u(rng))));
+        const ConvexView view = pt.view(true);
+        const double distance = distance_convex_triangle_by_faces(view, tris, int(tool.mesh.triangles.size()), a, b, d);
+        const double separation = distance > 0.0 ? distance : separate_convex_triangle(view, a, b, d).separation;
+        const Vec3* hint = glm::dot(before.direction, before.direction) > 0.0 ? &before.direction : nullptr;
+        const GjkSimplex* warm = before.simplex.count > 0 ? &before.simplex : nullptr;
+        for (const double floor : {separation - 1e-9, separation - 1e-6, separation + 1e-9, -1e-7}) {
+            for (const int iterations : {0, 64}) {
+                const DistanceBounds r = convex_triangle_separation(view, a, b, d, floor, -1e300, hint, warm, iterations);
+                ASSERT_LE(r.separation, separation + 1e-13) << "trial " << t << " floor " << floor;
+                ASSERT_GE(r.upper, distance - 1e-13) << "trial " << t << " floor " << floor;
+                if (iterations > 0 && distance > 1e-8 && floor <= separation - 1e-9) {
+                    // Apart: the search goes on to the distance, which meets the floor.
+                    ++apart;
+                    met += r.separation >= floor;
+                }
+            }
+            // Given up once the distance is known under a bound: it is under it.
+            const DistanceBounds g = convex_triangle_separation(view, a, b, d, floor, floor, hint, warm);
+            ASSERT_LE(g.separation, separation + 1e-13) << "trial " << t;
+            if (g.separation < floor) {
+                EXPECT_GE(g.upper, distance - 1e-13) << "trial " << t;
+            }
+        }
+        if (on_face && hint && separation >= -5e-8) {
+            ++resting;
+            resting_at_once +=
+                convex_triangle_separation(view, a, b, d, -1e-7, -1e300, hint, warm, 0).separation >= -1e-7;
+        }
+    }
+    EXPECT_GT(apart, 2000);
+    EXPECT_EQ(met, apart);
+    EXPECT_GT(resting, 300);
+    EXPECT_GT(resting_at_once, resting * 9 / 10);
+}
+
 TEST(Gjk, BoundsBracketTheExactDistanceOnABox) { gjk_brackets_the_distance(make_box(Vec3(1e-3, 2e-3, 0.5e-3)), 2e-3, 8); }
 
 TEST(Gjk, BoundsBracketTheExactDistanceOnProbeTips) {

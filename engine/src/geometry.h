@@ -189,6 +189,9 @@ struct DistanceBounds {
     // polytope changes by its displacement along the direction and the turn times its radius
     // (NearCacheEntry::direction_gap). -1e300 where there is no direction.
     double direction_gap = -1e300;
+    // The largest gap along any direction the search took: a lower bound on their separation, the
+    // distance when apart and less than 0 by how far they overlap (-1e300 before a direction).
+    double separation = -1e300;
     GjkSimplex simplex;  // the last simplex (count 0 when the hint alone settled it)
 };
 // `hint`, when given, is a direction roughly from the triangle towards the polytope: the search
@@ -204,6 +207,18 @@ DistanceBounds convex_triangle_distance(const Vec3* poly, int count, const Vec3&
 DistanceBounds convex_triangle_distance(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c,
                                         double cutoff = 1e300, double tolerance = 1e-13, int max_iterations = 64,
                                         const Vec3* hint = nullptr, const GjkSimplex* warm = nullptr);
+
+// The same search, for whether their separation is at least `settle_at` (which may be less than 0,
+// an overlap that is allowed): it stops as soon as the gap along a search direction says so
+// (DistanceBounds::separation >= settle_at), once the upper bound on the distance is under
+// `give_up_below` (the separation is too), or where the distance search would stop. A pair resting
+// in contact along the hint is settled by the hint's gap alone, where the distance search would
+// go on to prove them apart or touching. With max_iterations 0 the answer is the hint's gap
+// alone (-1e300 without a hint).
+DistanceBounds convex_triangle_separation(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c,
+                                          double settle_at, double give_up_below = -1e300,
+                                          const Vec3* hint = nullptr, const GjkSimplex* warm = nullptr,
+                                          int max_iterations = 64);
 
 // Distance between the convex polytope and a triangle: 0 when they touch or overlap; to within
 // 1e-13 m (GJK), or exactly from the polytope's triangles when rounding stalls GJK. With a

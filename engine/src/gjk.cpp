@@ -157,8 +157,12 @@ DistanceBounds& touching(DistanceBounds& r, const Simplex& s) {
     return r;
 }
 
+// Besides the distance's stops: `settle_at` ends the search once the gap along some direction (a
+// lower bound on the signed separation, DistanceBounds::separation) reaches it, and `give_up_below`
+// once the upper bound on the distance is under it.
 DistanceBounds distance_bounds(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c, double cutoff,
-                               double tolerance, int max_iterations, const Vec3* hint, const GjkSimplex* warm) {
+                               double tolerance, int max_iterations, const Vec3* hint, const GjkSimplex* warm,
+                               double settle_at = 1e300, double give_up_below = -1e300) {
     DistanceBounds r;
     const Vec3 tri[3] = {a, b, c};
     const int count = poly.vertex_count;
@@ -174,10 +178,13 @@ DistanceBounds distance_bounds(const ConvexView& poly, const Vec3& a, const Vec3
     if (hinted) {
         // The gap along the hint itself.
         r.direction_gap = glm::dot(*hint, s.p[0].p) / glm::length(*hint);
+        r.separation = r.direction_gap;
         lower = std::max(0.0, r.direction_gap);
         r.lower = lower;
         r.direction = *hint;
-        if (lower >= cutoff) return r;
+        if (lower >= cutoff || r.separation >= settle_at) return r;
+        // A check of the separation with no search has its answer: the hint's gap.
+        if (max_iterations <= 0 && settle_at < 1e300) return r;
     }
     if (warm && warm->count > 0 && warm->count <= 4) {
         // The earlier simplex, its points taken at this pose (repeats dropped); it starts the
@@ -217,11 +224,12 @@ DistanceBounds distance_bounds(const ConvexView& poly, const Vec3& a, const Vec3
         const Point w = support_least(poly, tri, v, s.p[s.n - 1].ia);
         // Every point z of D has v.z >= v.w: the gap along v bounds the distance.
         r.direction_gap = glm::dot(v, w.p) / vl;
+        r.separation = std::max(r.separation, r.direction_gap);
         lower = std::max(lower, r.direction_gap);
         r.lower = lower;
         r.upper = vl;
         r.direction = v;
-        if (lower >= cutoff || vl - lower <= tolerance) return r;
+        if (lower >= cutoff || vl - lower <= tolerance || r.separation >= settle_at || vl < give_up_below) return r;
         // w adds nothing the simplex has: no further progress is possible.
         bool known = false;
         for (int k = 0; k < s.n; ++k) known |= s.p[k].p == w.p;
@@ -252,6 +260,12 @@ DistanceBounds convex_triangle_distance(const ConvexView& poly, const Vec3& a, c
                                         double cutoff, double tolerance, int max_iterations, const Vec3* hint,
                                         const GjkSimplex* warm) {
     return distance_bounds(poly, a, b, c, cutoff, tolerance, max_iterations, hint, warm);
+}
+
+DistanceBounds convex_triangle_separation(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c,
+                                          double settle_at, double give_up_below, const Vec3* hint,
+                                          const GjkSimplex* warm, int max_iterations) {
+    return distance_bounds(poly, a, b, c, 1e300, 1e-13, max_iterations, hint, warm, settle_at, give_up_below);
 }
 
 }  // namespace sulcus

@@ -1753,16 +1753,24 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
                 nt.separation_m = std::max(witness, nt.lower_m);
                 continue;
             }
+            // Detect's upper bound on the distance here under the floor (a triangle the tool
+            // rests on): no bound here spares it the check at the new pose. Left unmeasured for a
+            // candidate that moves the tool less.
+            if (nt.upper_m < floor) continue;
             ++w.tests;
             const ModelObject& obj = model.objects[nt.object];
             const auto& t = obj.mesh.triangles[nt.tri];
             const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
-            // GJK's distance when they are apart (a bound as good as the separation, cheaper);
-            // the witnesses' bound where they touch.
+            // GJK's gap along its directions, until it reaches the floor (a bound as good as
+            // the separation, cheaper) or the distance is found under it; the witnesses' bound
+            // where they touch and the floor allows an overlap.
             const Vec3* hint = glm::dot(nt.direction, nt.direction) > 0.0 ? &nt.direction : nullptr;
             const GjkSimplex* warm = nt.simplex.count > 0 ? &nt.simplex : nullptr;
-            const double apart = convex_triangle_distance(view, t0, t1, t2, moved_by, 1e-13, 64, hint, warm).lower;
-            nt.separation_m = apart > 0.0 ? apart : compliant ? witness : separation_witness(model, view, nt, floor, w);
+            const DistanceBounds d = convex_triangle_separation(view, t0, t1, t2, floor, floor, hint, warm);
+            nt.separation_m = d.separation;
+            if (d.separation < floor && !(d.upper < floor))
+                nt.separation_m =
+                    std::max(d.separation, compliant ? witness : separation_witness(model, view, nt, floor, w));
         }
         // The tool at the new pose, placed once a triangle needs it.
         bool moved_placed = false;
@@ -1799,12 +1807,17 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
                 continue;
             }
             ++w.tests;
-            // Apart (GJK finds a gap along some direction): nothing to measure.
+            // Separated by at least the floor along some direction: nothing to measure. First the
+            // last direction (no search), then GJK from the triangle's normal, the direction that
+            // says so at once for the tool resting on the face.
             const Vec3& dir = w.near[i].direction;
-            const GjkSimplex& sx = w.near[i].simplex;
-            if (convex_triangle_distance(moved, t0, t1, t2, std::numeric_limits<double>::min(), 1e-13, 64,
-                                         glm::dot(dir, dir) > 0.0 ? &dir : nullptr, sx.count > 0 ? &sx : nullptr)
-                    .lower > 0.0)
+            const GjkSimplex* sx = w.near[i].simplex.count > 0 ? &w.near[i].simplex : nullptr;
+            if (glm::dot(dir, dir) > 0.0 &&
+                convex_triangle_separation(moved, t0, t1, t2, floor, -1e300, &dir, sx, 0).separation >= floor)
+                continue;
+            if (convex_triangle_separation(moved, t0, t1, t2, floor, -1e300, &obj.topology.triangle_normals[w.near[i].tri],
+                                           sx)
+                    .separation >= floor)
                 continue;
             if ((compliant ? witness : separation_witness(model, moved, w.near[i], floor, w)) < floor &&
                 separation_test(model, moved, w.near[i], w) < floor) {
