@@ -2110,9 +2110,20 @@ ContactCheck check_contacts(const Model& model, const Pose& base, const double x
         } else if (a.kind == AtomKind::FaceVertex) {
             d = 1e300;
             const Vec3 v = glm::transpose(at.R) * (o.mesh.vertices[a.object_vertex] - at.p);  // tool frame
-            for (const auto& t : tool.mesh.triangles)
-                d = std::min(d, closest_on_triangle(v, tool.mesh.vertices[t[0]], tool.mesh.vertices[t[1]],
-                                                    tool.mesh.vertices[t[2]]).distance);
+            auto to_triangle = [&](const std::array<uint32_t, 3>& t) {
+                return closest_on_triangle(v, tool.mesh.vertices[t[0]], tool.mesh.vertices[t[1]],
+                                           tool.mesh.vertices[t[2]]).distance;
+            };
+            // Without give the contact is real when some triangle is within the tolerance: the
+            // triangles on the atom's own face plane first, where the vertex mostly touches.
+            if (give == 0.0) {
+                const Vec3& fn = tool.face_normals[a.tool_face];
+                for (size_t t = 0; t < tool.mesh.triangles.size() && d > 10.0 * tol; ++t)
+                    if (glm::dot(tool.topology.triangle_normals[t], fn) > 1.0 - 1e-9)
+                        d = std::min(d, to_triangle(tool.mesh.triangles[t]));
+            }
+            if (!(d <= 10.0 * tol && give == 0.0))
+                for (const auto& t : tool.mesh.triangles) d = std::min(d, to_triangle(t));
         } else if (a.kind == AtomKind::EdgeEdge) {
             const auto& te = tool.edges[a.tool_edge];
             const MeshEdge& e = o.topology.edges[a.object_edge];
@@ -2263,6 +2274,15 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     auto t_detect_end = t_start, t_gather_end = t_start;
     double stage_detect = 0, stage_gather = 0, stage_solve = 0;
 
+    // The contact check of the solution (base, x_sol, the chosen atoms) as last made: made once
+    // for the several questions asked of it, again once any of them changes.
+    ContactCheck checked;
+    bool checked_valid = false;
+    auto contacts = [&]() -> const ContactCheck& {
+        if (!checked_valid) checked = check_contacts(model, base, x_sol, w);
+        checked_valid = true;
+        return checked;
+    };
     // A solution held on an extended plane (its contact is not real) becomes the base of another
     // pass of the stages within the tick, so the tool comes round the feature instead of hanging.
     bool have_prior = false;
@@ -2382,7 +2402,8 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             // hold nothing), and only what the straight box reaches is gathered. The step's box
             // reaches much further (the energy bound lets the tool turn far): lifting the probe
             // out of the tissue it brought in thousands of gingiva triangles.
-            const ContactCheck cc = solved ? check_contacts(model, base, x_sol, w) : ContactCheck{};
+            checked_valid = false;
+            const ContactCheck cc = solved ? contacts() : ContactCheck{};
             bool at_target = solved;
             for (int j = 0; j < 6 && at_target; ++j) at_target = x_sol[j] == target[j];
             const bool released = solved && !cc.real && !cc.virtual_only && !at_target;
@@ -2394,6 +2415,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                     straight_hi[j] = std::min(upper[j], std::max(0.0, target_local[j]));
                 }
                 reach = box_reach(S, model.tool.radius_m, straight_lo, straight_hi);
+                checked_valid = false;
                 solved = gather_near(model, base, w.tool_world, straight_lo, straight_hi, reach, w, false, prior_frame);
                 if (solved) {
                     res.stats.gather_truncated |= !gather_atoms(model, base, reach, push, w);
@@ -2422,7 +2444,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             stage_solve += micros(t_gather_end, Clock::now());
             if (!solved) scale *= 0.5;
         }
-        if (!solved || free_motion || !check_contacts(model, base, x_sol, w).any_virtual) break;
+        if (!solved || free_motion || !contacts().any_virtual) break;
         ++res.stats.passes;
     }
     if (model.settings.near_cache) {
@@ -2438,7 +2460,8 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
         base_stands = true;
         for (double& v : x_sol) v = 0.0;
     }
-    if (solved && !free_motion && res.stats.passes > 0 && check_contacts(model, base, x_sol, w).virtual_only) {
+    if (base_stands) checked_valid = false;
+    if (solved && !free_motion && res.stats.passes > 0 && contacts().virtual_only) {
         // Still held only on extended planes after every pass: no safe answer this tick. The
         // last pose (a real contact) is kept rather than a force rendered at a distance.
         solved = false;
