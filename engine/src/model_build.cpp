@@ -239,7 +239,7 @@ std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
         segments.vertices = mesh.vertices;
         for (uint32_t e = piece.edge_begin; e < piece.edge_begin + piece.edge_count; ++e)
             segments.triangles.push_back({tool.piece_edges[e][0], tool.piece_edges[e][1], tool.piece_edges[e][1]});
-        piece.edge_bvh = Bvh(segments, 2);
+        piece.edge_bvh = Bvh(segments, 6);
     }
     Aabb box;
     for (const Vec3& v : mesh.vertices) {
