@@ -507,11 +507,14 @@ constexpr long kSupersetSlice = 384;
 // Distance tests in detect that make a tick heavy (tend_superset): about a tenth of the ticks in
 // contact on the bench's dense wedge have more.
 constexpr int kHeavyDetectTests = 64;
+// Triangles tested in the whole tick that leave room for a double slice: about half the ticks
+// in contact on the dense wedge test fewer, and cost under 0.6 M instructions (p99) with it.
+constexpr int kLightTests = 40;
 
 // Piece k's superset for a tick of reach `reach` at pose `at` (capsules `axis`): the current one
 // while it holds, the one in progress once complete, and a new one gathered at once when neither
-// holds. A new one is started once the tool has used 40 % of the margin, and gathered in slices
-// at the ends of ticks (tend_superset). Null when a superset does not fit (the caller measures
+// holds. A new one is started once the tool has used a quarter of the margin, and gathered in
+// slices at the ends of ticks (tend_superset). Null when a superset does not fit (the caller measures
 // from scratch).
 PieceNearCache* piece_superset(const Model& model, NearCache& c, size_t k, const Pose& at, const Vec3* axis,
                                double reach, double tol) {
@@ -533,7 +536,7 @@ PieceNearCache* piece_superset(const Model& model, NearCache& c, size_t k, const
     if (current > 0.0) {
         pc.room_m = current;
         pc.margin_m = margin;
-        if (!b.active && current < 0.6 * margin) start_superset(c, k, at, axis, need + margin);
+        if (!b.active && current < 0.75 * margin) start_superset(c, k, at, axis, need + margin);
         return &pc;
     }
     start_superset(c, k, at, axis, need + margin);
@@ -545,19 +548,27 @@ PieceNearCache* piece_superset(const Model& model, NearCache& c, size_t k, const
     return &pc;
 }
 
-// At the end of a tick: a slice of the superset in progress, or its install once complete. A heavy
-// tick (another pass, a release, many distance tests in detect) leaves it to a lighter one while
-// the current superset had a third of its margin left at its last use, so that the two costs
-// seldom meet. Nothing for a build of another model (a tick that never reached the cache's
-// check of the model, near_cache_begin).
-void tend_superset(const Model& model, NearCache& c, bool heavy) {
+// How much a tick did before the end-of-tick slice (tend_superset): another pass or a release;
+// many distance tests in detect; few triangles tested in all; neither.
+enum class Load { Passes, Tests, Light, Usual };
+
+// At the end of a tick: a slice of the superset in progress, or its install once complete. A tick
+// with another pass or a release leaves it to a lighter one while the current superset had a
+// tenth of its margin left at its last use, one with many distance tests in detect while it had
+// three tenths, so that the costs seldom meet; a light tick (few triangles tested) takes a double
+// slice. Nothing for a build of another model (a tick that never reached the cache's check of the
+// model, near_cache_begin).
+void tend_superset(const Model& model, NearCache& c, Load load) {
     SupersetBuild& b = c.build;
     if (!b.active || c.model_serial != model.serial) return;
     const PieceNearCache& pc = c.piece[b.piece];
-    if (heavy && pc.valid && pc.room_m > 0.3 * pc.margin_m) return;
+    if (load == Load::Passes || load == Load::Tests) {
+        const double spare = load == Load::Passes ? 0.1 : 0.3;
+        if (pc.valid && pc.room_m > spare * pc.margin_m) return;
+    }
     // Walked to its end by the last slice: installed now, the walk's tick having had its slice.
     if (b.object >= model.objects.size()) install_superset(model, c);
-    else advance_superset(model, c, kSupersetSlice);
+    else advance_superset(model, c, load == Load::Light ? 2 * kSupersetSlice : kSupersetSlice);
 }
 
 // Whether the earlier pass's complete near set (Workspace::prior) holds every triangle piece k can
@@ -2450,7 +2461,11 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     if (model.settings.near_cache) {
         // The superset in progress gets its slice where this tick has room for it.
         const auto t0 = Clock::now();
-        tend_superset(model, cache, res.stats.passes > 0 || res.stats.released || w.detect_tests >= kHeavyDetectTests);
+        const Load load = res.stats.passes > 0 || res.stats.released ? Load::Passes
+                          : w.detect_tests >= kHeavyDetectTests          ? Load::Tests
+                          : w.tests <= kLightTests                       ? Load::Light
+                                                                         : Load::Usual;
+        tend_superset(model, cache, load);
         stage_detect += micros(t0, Clock::now());
     }
     bool base_stands = false;
