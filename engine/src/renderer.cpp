@@ -275,6 +275,22 @@ struct Workspace {
     int gap_extremes[kMaxToolPieces][2] = {};
     // The face of each piece that last showed the guard a triangle vertex not deep inside it.
     int deep_rejecting[kMaxToolPieces] = {};
+    // The tool edges (relative to their piece's first) whose boxes meet a box about an object
+    // edge in the piece's frame, by a hash of the (object, edge, piece) feature plus one (key 0:
+    // none), for a model (Model::serial): the box of the edge that gather queries lies inside it
+    // while the tool moves less than the room it was widened by, and those hits then hold every
+    // one of its own query's. Kept along a session and across sessions, as they depend on the
+    // geometry only.
+    static constexpr int kEdgeMemoHits = 24;
+    struct EdgeHitMemo {
+        uint64_t key = 0;
+        uint64_t model = 0;
+        Aabb box;
+        int count = 0;
+        uint16_t hits[kEdgeMemoHits];
+    };
+    static constexpr int kEdgeMemoBits = 10;
+    EdgeHitMemo edge_memo[1 << kEdgeMemoBits];
 };
 
 Workspace& workspace() {
@@ -931,6 +947,12 @@ bool in_vertex_cone(const ModelObject& obj, uint32_t v, const Vec3& p) {
     return true;
 }
 
+// Whether box `inner` lies inside box `outer`.
+bool contains(const Aabb& outer, const Aabb& inner) {
+    return outer.lo.x <= inner.lo.x && outer.lo.y <= inner.lo.y && outer.lo.z <= inner.lo.z &&
+           inner.hi.x <= outer.hi.x && inner.hi.y <= outer.hi.y && inner.hi.z <= outer.hi.z;
+}
+
 // gather: the principal-contact atoms of every feature pair within `reach`. The tool may be inside
 // a compliant object by as deep as it is at the base (Workspace::soft) plus the reach: that
 // object's features stay in play that far behind their surface. False when a tool vertex's
@@ -1224,12 +1246,37 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         local.grow(to_tool * (v1 - base.position));
         const double far = reach_of(feature_object(w.oedges[i]));
         local.inflate(far + 1e-12);
+        // With the near cache (RendererSettings::near_cache), from the memo while its box holds
+        // this one; else queried in a box with room for the tool to move by `far` more, and
+        // kept. A hit of the wider box that this one's query would not have made is further than
+        // `far` from the edge, which the tests below find.
         int hits = 0;
-        piece.edge_bvh.query(local, [&](uint32_t e) {
-            w.edge_hits[hits++] = piece.edge_begin + e;
-            return true;
-        });
-        std::sort(w.edge_hits, w.edge_hits + hits);
+        const bool memo_on = model.settings.near_cache;
+        const uint64_t memo_key = w.oedges[i] + 1;
+        Workspace::EdgeHitMemo& memo = w.edge_memo[hash_slot(memo_key, Workspace::kEdgeMemoBits)];
+        if (memo_on && memo.key == memo_key && memo.model == model.serial && contains(memo.box, local)) {
+            for (int h = 0; h < memo.count; ++h) w.edge_hits[hits++] = piece.edge_begin + memo.hits[h];
+        } else if (!memo_on) {
+            piece.edge_bvh.query(local, [&](uint32_t e) {
+                w.edge_hits[hits++] = piece.edge_begin + e;
+                return true;
+            });
+            std::sort(w.edge_hits, w.edge_hits + hits);
+        } else {
+            Aabb wide = local;
+            wide.inflate(far);
+            piece.edge_bvh.query(wide, [&](uint32_t e) {
+                w.edge_hits[hits++] = piece.edge_begin + e;
+                return true;
+            });
+            std::sort(w.edge_hits, w.edge_hits + hits);
+            memo.key = hits <= Workspace::kEdgeMemoHits ? memo_key : 0;
+            memo.model = model.serial;
+            memo.box = wide;
+            memo.count = hits;
+            if (memo.key != 0)
+                for (int h = 0; h < hits; ++h) memo.hits[h] = uint16_t(w.edge_hits[h] - piece.edge_begin);
+        }
         // A segment is no closer to the tool edge than the distance from its midpoint less its
         // half length: a cheap bound before the exact closest points.
         const Vec3 mid_o = 0.5 * (v0 + v1);

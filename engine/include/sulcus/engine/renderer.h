@@ -60,8 +60,9 @@ struct RendererSettings {
     double contact_distance_m = 1e-6;
     // Keep what detect measured about the triangles around each tool piece from tick to tick and
     // measure again only those whose verdict the tool's motion since could have changed; a later
-    // pass of a tick likewise narrows the earlier pass's near set. Changes the step's cost, not its
-    // results (off: every tick and pass measures from scratch).
+    // pass of a tick likewise narrows the earlier pass's near set, and gather keeps the tool edges
+    // near each object edge for the ticks after. Changes the step's cost, not its results (off:
+    // every tick and pass measures from scratch).
     bool near_cache = true;
     // Leave out a candidate that swaps an atom holding nothing in the default set's answer for
     // its alternative (that answer the first QP from the step's start): it cannot have less
