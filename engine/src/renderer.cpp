@@ -291,6 +291,21 @@ struct Workspace {
     };
     static constexpr int kEdgeMemoBits = 10;
     EdgeHitMemo edge_memo[1 << kEdgeMemoBits];
+    // The faces of a piece that an object vertex could be most in front of, or within the tie
+    // tolerance of it, while it stays within `room` of where they were found (`at`, m, in the
+    // piece's frame): those within twice the room and the tie tolerance of the most there. By a
+    // hash of the (object, vertex, piece) feature plus one (key 0: none), for a model.
+    static constexpr int kFaceMemoFaces = 16;
+    struct FaceMemo {
+        uint64_t key = 0;
+        uint64_t model = 0;
+        Vec3 at{0.0};
+        double room = 0.0;
+        int count = 0;
+        uint16_t faces[kFaceMemoFaces];
+    };
+    static constexpr int kFaceMemoBits = 10;
+    FaceMemo face_memo[1 << kFaceMemoBits];
 };
 
 Workspace& workspace() {
@@ -1197,7 +1212,19 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             if (beyond[k] >= 0 && glm::dot(w.face_n[beyond[k]], p) - w.face_d[beyond[k]] > reach) continue;
             int best = -1;
             double best_s = -1e300;
-            for (int f = f0; f < f1; ++f) {
+            // With the near cache, the memo's faces while the vertex is within their room: every
+            // face off them is further than the tie tolerance below the most in front. Else every
+            // face, and the memo made where the loop saw them all.
+            const uint64_t memo_key = w.overts[i] + 1;
+            Workspace::FaceMemo& memo = w.face_memo[hash_slot(memo_key, Workspace::kFaceMemoBits)];
+            const Vec3 local = to_tool * (p - base.position);
+            const Vec3 off = local - memo.at;
+            const bool memo_on = model.settings.near_cache;
+            const bool from_memo = memo_on && memo.key == memo_key && memo.model == model.serial &&
+                                   glm::dot(off, off) <= memo.room * memo.room;
+            const int listed = from_memo ? memo.count : f1 - f0;
+            for (int j = 0; j < listed; ++j) {
+                const int f = from_memo ? int(memo.faces[j]) : f0 + j;
                 const double s = glm::dot(w.face_n[f], p) - w.face_d[f];
                 w.face_s[f] = s;
                 if (s > best_s) {
@@ -1207,6 +1234,21 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
                 }
             }
             if (best_s > reach) beyond[k] = best;
+            if (memo_on && !from_memo && best >= 0 && !(best_s > reach)) {
+                const double room = std::max(reach, 0.0);
+                const double within = best_s - 2.0 * room - model.settings.tie_tol_m - 1e-12;
+                int count = 0;
+                for (int f = f0; f < f1 && count <= Workspace::kFaceMemoFaces; ++f)
+                    if (w.face_s[f] >= within) {
+                        if (count < Workspace::kFaceMemoFaces) memo.faces[count] = uint16_t(f);
+                        ++count;
+                    }
+                memo.key = count <= Workspace::kFaceMemoFaces ? memo_key : 0;
+                memo.model = model.serial;
+                memo.at = local;
+                memo.room = room;
+                memo.count = count;
+            }
             if (best < 0 || best_s > reach || best_s < -back_of(feature_object(w.overts[i]))) continue;
             // Inside a compliant object: only a vertex pressing the way the object pushes back
             // (the tool face's normal against the push) holds the tool.
@@ -1218,7 +1260,8 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             at.tool_face = static_cast<uint32_t>(best);
             const int index = w.atom_count;
             add_atom(w, at);
-            for (int f = f0; f < f1; ++f) {
+            for (int j = 0; j < listed; ++j) {
+                const int f = from_memo ? int(memo.faces[j]) : f0 + j;
                 if (f == best) continue;
                 if (w.face_s[f] >= best_s - model.settings.tie_tol_m) {
                     Atom alt = at;
