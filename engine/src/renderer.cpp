@@ -293,8 +293,9 @@ struct Workspace {
     EdgeHitMemo edge_memo[1 << kEdgeMemoBits];
     // The faces of a piece that an object vertex could be most in front of, or within the tie
     // tolerance of it, while it stays within `room` of where they were found (`at`, m, in the
-    // piece's frame): those within twice the room and the tie tolerance of the most there. By a
-    // hash of the (object, vertex, piece) feature plus one (key 0: none), for a model.
+    // piece's frame): those within twice the room and the tie tolerance of the most there; or
+    // (count -1) the face that put it beyond the reach, faces[0]. By a hash of the (object,
+    // vertex, piece) feature plus one (key 0: none), for a model.
     static constexpr int kFaceMemoFaces = 16;
     struct FaceMemo {
         uint64_t key = 0;
@@ -1220,8 +1221,16 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             const Vec3 local = to_tool * (p - base.position);
             const Vec3 off = local - memo.at;
             const bool memo_on = model.settings.near_cache;
-            const bool from_memo = memo_on && memo.key == memo_key && memo.model == model.serial &&
-                                   glm::dot(off, off) <= memo.room * memo.room;
+            const bool known = memo_on && memo.key == memo_key && memo.model == model.serial;
+            if (known && memo.count < 0) {
+                // Beyond the reach at the last look: mostly still, by the same face.
+                const int f = memo.faces[0];
+                if (glm::dot(w.face_n[f], p) - w.face_d[f] > reach) {
+                    beyond[k] = f;
+                    continue;
+                }
+            }
+            const bool from_memo = known && memo.count >= 0 && glm::dot(off, off) <= memo.room * memo.room;
             const int listed = from_memo ? memo.count : f1 - f0;
             for (int j = 0; j < listed; ++j) {
                 const int f = from_memo ? int(memo.faces[j]) : f0 + j;
@@ -1234,7 +1243,12 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
                 }
             }
             if (best_s > reach) beyond[k] = best;
-            if (memo_on && !from_memo && best >= 0 && !(best_s > reach)) {
+            if (memo_on && best_s > reach) {
+                memo.key = memo_key;
+                memo.model = model.serial;
+                memo.count = -1;
+                memo.faces[0] = uint16_t(best);
+            } else if (memo_on && !from_memo && best >= 0) {
                 const double room = std::max(reach, 0.0);
                 const double within = best_s - 2.0 * room - model.settings.tie_tol_m - 1e-12;
                 int count = 0;
