@@ -963,12 +963,6 @@ bool in_vertex_cone(const ModelObject& obj, uint32_t v, const Vec3& p) {
     return true;
 }
 
-// Whether box `inner` lies inside box `outer`.
-bool contains(const Aabb& outer, const Aabb& inner) {
-    return outer.lo.x <= inner.lo.x && outer.lo.y <= inner.lo.y && outer.lo.z <= inner.lo.z &&
-           inner.hi.x <= outer.hi.x && inner.hi.y <= outer.hi.y && inner.hi.z <= outer.hi.z;
-}
-
 // gather: the principal-contact atoms of every feature pair within `reach`. The tool may be inside
 // a compliant object by as deep as it is at the base (Workspace::soft) plus the reach: that
 // object's features stay in play that far behind their surface. False when a tool vertex's
@@ -1311,28 +1305,24 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         const bool memo_on = model.settings.near_cache;
         const uint64_t memo_key = w.oedges[i] + 1;
         Workspace::EdgeHitMemo& memo = w.edge_memo[hash_slot(memo_key, Workspace::kEdgeMemoBits)];
-        if (memo_on && memo.key == memo_key && memo.model == model.serial && contains(memo.box, local)) {
+        if (memo_on && memo.key == memo_key && memo.model == model.serial && memo.box.contains(local)) {
             for (int h = 0; h < memo.count; ++h) w.edge_hits[hits++] = piece.edge_begin + memo.hits[h];
-        } else if (!memo_on) {
-            piece.edge_bvh.query(local, [&](uint32_t e) {
-                w.edge_hits[hits++] = piece.edge_begin + e;
-                return true;
-            });
-            std::sort(w.edge_hits, w.edge_hits + hits);
         } else {
-            Aabb wide = local;
-            wide.inflate(far);
-            piece.edge_bvh.query(wide, [&](uint32_t e) {
+            Aabb box = local;
+            if (memo_on) box.inflate(far);
+            piece.edge_bvh.query(box, [&](uint32_t e) {
                 w.edge_hits[hits++] = piece.edge_begin + e;
                 return true;
             });
             std::sort(w.edge_hits, w.edge_hits + hits);
-            memo.key = hits <= Workspace::kEdgeMemoHits ? memo_key : 0;
-            memo.model = model.serial;
-            memo.box = wide;
-            memo.count = hits;
-            if (memo.key != 0)
-                for (int h = 0; h < hits; ++h) memo.hits[h] = uint16_t(w.edge_hits[h] - piece.edge_begin);
+            if (memo_on) {
+                memo.key = hits <= Workspace::kEdgeMemoHits ? memo_key : 0;
+                memo.model = model.serial;
+                memo.box = box;
+                memo.count = hits;
+                if (memo.key != 0)
+                    for (int h = 0; h < hits; ++h) memo.hits[h] = uint16_t(w.edge_hits[h] - piece.edge_begin);
+            }
         }
         // A segment is no closer to the tool edge than the distance from its midpoint less its
         // half length: a cheap bound before the exact closest points.

@@ -45,6 +45,11 @@ struct Aabb {
         return lo.x <= b.hi.x && b.lo.x <= hi.x && lo.y <= b.hi.y && b.lo.y <= hi.y && lo.z <= b.hi.z &&
                b.lo.z <= hi.z;
     }
+    // Whether box b lies inside this one.
+    bool contains(const Aabb& b) const {
+        return lo.x <= b.lo.x && lo.y <= b.lo.y && lo.z <= b.lo.z && b.hi.x <= hi.x && b.hi.y <= hi.y &&
+               b.hi.z <= hi.z;
+    }
     bool empty() const { return lo.x > hi.x; }
     Vec3 center() const { return 0.5 * (lo + hi); }
 };
