@@ -112,8 +112,13 @@ struct NearCache {
     // Per slot, how far the tool's origin moved and how far the tool turned from the slot's pose
     // to the current one, worked out once per current pose (origin_motion).
     Vec3 origin_shift[kNearCacheSlots] = {};  // m
+    double origin_move[kNearCacheSlots] = {};  // its length (m)
     double origin_turn[kNearCacheSlots] = {};
     uint64_t origin_for[kNearCacheSlots] = {};
+    // Per slot, the tool's turn from the slot's pose to the current one (rad), which the motion
+    // bounds of every piece and the origin's motion share, worked out once per current pose.
+    double turn_rad[kNearCacheSlots] = {};
+    uint64_t turn_for[kNearCacheSlots] = {};
     PieceNearCache piece[kMaxToolPieces];
     int32_t table[kNearCacheHash];  // (object, triangle) -> index in the superset being replaced
     SupersetBuild build;            // at most one in progress
@@ -136,10 +141,17 @@ struct NearCache {
 
 // How far no point of `piece` moves between poses `from` and `to`: its centre's displacement plus
 // the turn times its spread, with room for the rounding of placing the tool at either.
-inline double motion_bound(const ToolPiece& piece, const Pose& from, const Pose& to) {
+// The turn between the poses (rad) as motion_bound takes it.
+inline double pose_turn(const Pose& from, const Pose& to) {
+    return glm::length(quat_log(to.orientation * glm::conjugate(from.orientation)));
+}
+// motion_bound with the turn from `from` to `to` (pose_turn) given.
+inline double motion_bound_turned(const ToolPiece& piece, const Pose& from, const Pose& to, double turn) {
     const Vec3 a = from.position + from.orientation * piece.centre, b = to.position + to.orientation * piece.centre;
-    const double turn = glm::length(quat_log(to.orientation * glm::conjugate(from.orientation)));
     return glm::length(b - a) + turn * piece.spread_m + 1e-12 + 1e-13 * (glm::length(b) + piece.spread_m);
+}
+inline double motion_bound(const ToolPiece& piece, const Pose& from, const Pose& to) {
+    return motion_bound_turned(piece, from, to, pose_turn(from, to));
 }
 
 // How far the tool's origin moves, and how far it turns, from pose `from` to any pose of the
@@ -193,8 +205,9 @@ struct PieceReach {
 
     // The furthest of a triangle's vertices from the origin (m).
     double rho(const Vec3& a, const Vec3& b, const Vec3& c) const {
-        return std::sqrt(std::max({glm::dot(a - origin, a - origin), glm::dot(b - origin, b - origin),
-                                   glm::dot(c - origin, c - origin)}));
+        const double da = glm::dot(a - origin, a - origin), db = glm::dot(b - origin, b - origin),
+                     dc = glm::dot(c - origin, c - origin);
+        return std::sqrt(std::max(std::max(da, db), dc));
     }
     // The reach of a triangle that far.
     double of(double rho) const {
@@ -268,15 +281,27 @@ inline int near_cache_slot(const NearCache& c, uint64_t stamp) {
     return c.ring_stamp[slot] == stamp ? slot : -1;
 }
 
+// The tool's turn from the pose of a kept slot to the current one (NearCache::turn_rad).
+inline double near_cache_turn(NearCache& c, int slot) {
+    if (c.turn_for[slot] != c.stamp) {
+        c.turn_rad[slot] = pose_turn(c.ring[slot], c.ring[c.stamp % kNearCacheSlots]);
+        c.turn_for[slot] = c.stamp;
+    }
+    return c.turn_rad[slot];
+}
+
+// Works out NearCache::motion_m for a kept slot and piece k at the current pose (out of line, so
+// that the look-up below stays small enough to inline where it is asked per triangle).
+void near_cache_measure_motion(NearCache& c, const Model& model, int slot, size_t k);
+// Works out NearCache::origin_shift, origin_move and origin_turn for a kept slot.
+void near_cache_measure_origin(NearCache& c, int slot);
+
 // How far no point of piece k (of `model`) moved from the pose of `stamp` to the current one;
 // false when that pose is no longer kept.
 inline bool near_cache_motion(NearCache& c, const Model& model, uint64_t stamp, size_t k, double& motion) {
     const int slot = near_cache_slot(c, stamp);
     if (slot < 0) return false;
-    if (c.motion_for[slot][k] != c.stamp) {
-        c.motion_m[slot][k] = motion_bound(model.tool.pieces[k], c.ring[slot], c.ring[c.stamp % kNearCacheSlots]);
-        c.motion_for[slot][k] = c.stamp;
-    }
+    if (c.motion_for[slot][k] != c.stamp) near_cache_measure_motion(c, model, slot, k);
     motion = c.motion_m[slot][k];
     return true;
 }
@@ -305,7 +330,7 @@ struct OriginMotion {
 
 inline OriginMotion origin_motion(const Pose& from, const Pose& to) {
     const Vec3 shift = to.position - from.position;
-    return {shift, glm::length(shift), glm::length(quat_log(to.orientation * glm::conjugate(from.orientation)))};
+    return {shift, glm::length(shift), pose_turn(from, to)};
 }
 
 // The tool's motion from the pose of `stamp` to the current one; false when that pose is no longer
@@ -313,13 +338,8 @@ inline OriginMotion origin_motion(const Pose& from, const Pose& to) {
 inline bool near_cache_origin_motion(NearCache& c, uint64_t stamp, OriginMotion& motion) {
     const int slot = near_cache_slot(c, stamp);
     if (slot < 0) return false;
-    if (c.origin_for[slot] != c.stamp) {
-        const OriginMotion m = origin_motion(c.ring[slot], c.ring[c.stamp % kNearCacheSlots]);
-        c.origin_shift[slot] = m.shift;
-        c.origin_turn[slot] = m.turn;
-        c.origin_for[slot] = c.stamp;
-    }
-    motion = {c.origin_shift[slot], glm::length(c.origin_shift[slot]), c.origin_turn[slot]};
+    if (c.origin_for[slot] != c.stamp) near_cache_measure_origin(c, slot);
+    motion = {c.origin_shift[slot], c.origin_move[slot], c.origin_turn[slot]};
     return true;
 }
 

@@ -67,6 +67,20 @@ void compute_wrench(const HapticSettings& h, const Pose& graphic, const Pose& ha
                 quat_log(graphic.orientation * glm::conjugate(haptic.orientation));
 }
 
+void near_cache_measure_motion(NearCache& c, const Model& model, int slot, size_t k) {
+    c.motion_m[slot][k] = motion_bound_turned(model.tool.pieces[k], c.ring[slot], c.ring[c.stamp % kNearCacheSlots],
+                                              near_cache_turn(c, slot));
+    c.motion_for[slot][k] = c.stamp;
+}
+
+void near_cache_measure_origin(NearCache& c, int slot) {
+    const Vec3 shift = c.ring[c.stamp % kNearCacheSlots].position - c.ring[slot].position;
+    c.origin_shift[slot] = shift;
+    c.origin_move[slot] = glm::length(shift);
+    c.origin_turn[slot] = near_cache_turn(c, slot);
+    c.origin_for[slot] = c.stamp;
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -781,9 +795,15 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                 const double path = cache.path_m[k];
                 // With room for the rounding of the sums along the path.
                 const double skip_over = reach + tol + 1e-15 * (1.0 + path);
-                for (; cursor < pc->count && pc->object[cursor] == ok && !overflow; ++cursor) {
+                // This object's run of entries.
+                const int end = int(std::find_if(pc->object + cursor, pc->object + pc->count,
+                                                 [ok](uint16_t x) { return x != ok; }) -
+                                    pc->object);
+                const double* const due = pc->due;
+                for (; cursor < end && !overflow; ++cursor) {
                     // Out of reach while the path has not grown by its distance bound since.
-                    if (pc->due[cursor] - path > skip_over) continue;
+                    while (cursor < end && due[cursor] - path > skip_over) ++cursor;
+                    if (cursor == end) break;
                     NearCacheEntry& e = pc->entries[cursor];
                     double m;
                     const bool known = near_cache_entry_motion(cache, model, e, k, m);
