@@ -98,6 +98,60 @@ TEST(ToolPieces, EachPieceListsItsOwnVerticesInOrderAlongItsAxis) {
     EXPECT_GT(std::abs(tool.pieces[1].axis.x), 0.999);
 }
 
+// The slabs across each piece's axis (ToolPiece::cross_range) hold every vertex a ball holds:
+// for balls round points about the piece, at the radii gather asks (tens of micrometres to a
+// millimetre), the masks of the slabs the ball's shadow meets along both cross vectors have the
+// bit of each vertex within the ball. And they leave some out, or they would save nothing.
+TEST(ToolPieces, TheSlabsAcrossTheAxisHoldEveryVertexABallHolds) {
+    std::vector<TriMesh> tools = {bent_probe()};
+    for (ProbeKind kind : kAllProbeKinds) tools.push_back(make_probe_tip_collision(kind));
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> u(-1.0, 1.0), unit(0.0, 1.0);
+    int balls = 0, held = 0, left_out = 0;
+    for (const TriMesh& mesh : tools) {
+        const ModelBuild b = build_model(mesh, {}, RendererSettings{});
+        ASSERT_TRUE(b.model) << b.error;
+        const ModelTool& tool = b.model->tool;
+        for (const ToolPiece& p : tool.pieces) {
+            if (p.vertex_count > 64u) {
+                EXPECT_EQ(p.cross_cells, 0);  // gather walks the axial run alone
+                continue;
+            }
+            ASSERT_EQ(p.cross_cells, kCrossCells);
+            EXPECT_NEAR(glm::length(p.cross_u), 1.0, 1e-12);
+            EXPECT_NEAR(glm::length(p.cross_w), 1.0, 1e-12);
+            EXPECT_NEAR(glm::dot(p.cross_u, p.axis), 0.0, 1e-12);
+            EXPECT_NEAR(glm::dot(p.cross_w, p.axis), 0.0, 1e-12);
+            EXPECT_NEAR(glm::dot(p.cross_u, p.cross_w), 0.0, 1e-12);
+            for (int trial = 0; trial < 2000; ++trial) {
+                // Round a vertex of the piece, or anywhere in its box.
+                const uint32_t near = p.vertex_begin + uint32_t(rng() % p.vertex_count);
+                const Vec3 centre = trial % 2 == 0 ? tool.mesh.vertices[near] + 3e-4 * Vec3(u(rng), u(rng), u(rng))
+                                                   : p.centre + p.spread_m * Vec3(u(rng), u(rng), u(rng));
+                const double radius = 1e-5 * std::pow(100.0, unit(rng));
+                const double cu = glm::dot(p.cross_u, centre), cw = glm::dot(p.cross_w, centre);
+                const uint64_t mask = p.cross_range[0][size_t(p.cross_cell(0, cu - radius) * kCrossCells +
+                                                             p.cross_cell(0, cu + radius))] &
+                                      p.cross_range[1][size_t(p.cross_cell(1, cw - radius) * kCrossCells +
+                                                             p.cross_cell(1, cw + radius))];
+                ++balls;
+                for (uint32_t r = 0; r < p.vertex_count; ++r) {
+                    const Vec3& v = tool.mesh.vertices[tool.axial_vertices[p.vertex_begin + r]];
+                    const bool in_mask = (mask >> r & 1u) != 0;
+                    if (glm::length(v - centre) <= radius) {
+                        ++held;
+                        EXPECT_TRUE(in_mask) << "vertex " << r << " of a piece, ball of " << radius << " m";
+                    } else if (!in_mask) {
+                        ++left_out;
+                    }
+                }
+            }
+        }
+    }
+    EXPECT_GT(held, balls / 10);
+    EXPECT_GT(left_out, balls);
+}
+
 // A piece certified for it finds the vertex least along a direction by descending along its
 // corners: the same value as looking at every vertex, from any start, for any direction; GJK's
 // bounds with the descent are those without it, to the tolerance asked. Certified: a vertex

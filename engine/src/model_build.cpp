@@ -278,6 +278,41 @@ std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
             tool.axial_vertices.push_back(piece.vertex_begin + v);
             tool.axial_coords.push_back(coord(v));
         }
+        if (order.size() <= 64) {
+            // The grid across the axis (ToolPiece::cross_mask), its bits by axial order.
+            const Vec3 a = piece.axis;
+            const Vec3 e = std::abs(a.x) <= std::abs(a.y) && std::abs(a.x) <= std::abs(a.z) ? Vec3(1.0, 0.0, 0.0)
+                           : std::abs(a.y) <= std::abs(a.z)                                   ? Vec3(0.0, 1.0, 0.0)
+                                                                                              : Vec3(0.0, 0.0, 1.0);
+            piece.cross_u = glm::normalize(glm::cross(a, e));
+            piece.cross_w = glm::cross(a, piece.cross_u);
+            double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
+            for (const Vec3& p : mesh.vertices) {
+                const double c[2] = {glm::dot(piece.cross_u, p), glm::dot(piece.cross_w, p)};
+                for (int k = 0; k < 2; ++k) {
+                    lo[k] = std::min(lo[k], c[k]);
+                    hi[k] = std::max(hi[k], c[k]);
+                }
+            }
+            for (int k = 0; k < 2; ++k) {
+                piece.cross_lo_m[size_t(k)] = lo[k];
+                piece.cross_cell_m[size_t(k)] = hi[k] > lo[k] ? (hi[k] - lo[k]) / kCrossCells : 1.0;
+            }
+            piece.cross_cells = kCrossCells;
+            for (int k = 0; k < 2; ++k) {
+                const Vec3 along = k == 0 ? piece.cross_u : piece.cross_w;
+                uint64_t slab[kCrossCells] = {};
+                for (size_t r = 0; r < order.size(); ++r)
+                    slab[piece.cross_cell(k, glm::dot(along, mesh.vertices[order[r]]))] |= uint64_t(1) << r;
+                for (int i0 = 0; i0 < kCrossCells; ++i0) {
+                    uint64_t m = 0;
+                    for (int i1 = i0; i1 < kCrossCells; ++i1) {
+                        m |= slab[i1];
+                        piece.cross_range[size_t(k)][size_t(i0 * kCrossCells + i1)] = m;
+                    }
+                }
+            }
+        }
     }
     tool.pieces.push_back(piece);
     return "";

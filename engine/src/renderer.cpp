@@ -1014,7 +1014,12 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
     // vertices sorted along its axis that falls in it (a nanometre over, for the rounding of
     // placing them) can pass the sphere test below.
     Vec3 axis_world[kMaxToolPieces];
-    for (size_t k = 0; k < tool.pieces.size(); ++k) axis_world[k] = base.orientation * tool.pieces[k].axis;
+    Vec3 cross_world[kMaxToolPieces][2];
+    for (size_t k = 0; k < tool.pieces.size(); ++k) {
+        axis_world[k] = base.orientation * tool.pieces[k].axis;
+        cross_world[k][0] = base.orientation * tool.pieces[k].cross_u;
+        cross_world[k][1] = base.orientation * tool.pieces[k].cross_w;
+    }
     const double axial_slack = 1e-9 + 1e-12 * (glm::length(base.position) + tool.radius_m);
     for (int i = 0; i < w.near_count; ++i) {
         const NearTri nt = w.near[i];
@@ -1047,8 +1052,32 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         const double* coords = tool.axial_coords.data() + piece.vertex_begin;
         const uint32_t* order = tool.axial_vertices.data() + piece.vertex_begin;
         const int run_end = int(piece.vertex_count);
-        for (int r = int(std::lower_bound(coords, coords + run_end, along - sphere - axial_slack) - coords);
-             r < run_end && coords[r] <= along + sphere + axial_slack; ++r) {
+        const int run_lo = int(std::lower_bound(coords, coords + run_end, along - sphere - axial_slack) - coords);
+        const int run_hi = int(std::upper_bound(coords + run_lo, coords + run_end, along + sphere + axial_slack) - coords);
+        // The run's vertices the ball's shadow across the axis may hold (every one of the run
+        // without the grid), in the run's order.
+        uint64_t candidates = 0;
+        if (piece.cross_cells > 0 && run_lo < run_hi) {
+            const Vec3 c = ts.centre - base.position;
+            const double cu = glm::dot(cross_world[nt.piece][0], c), cw = glm::dot(cross_world[nt.piece][1], c);
+            const double shadow = sphere + axial_slack;
+            if (std::isfinite(cu) && std::isfinite(cw)) {
+                const int i0 = piece.cross_cell(0, cu - shadow), i1 = piece.cross_cell(0, cu + shadow);
+                const int j0 = piece.cross_cell(1, cw - shadow), j1 = piece.cross_cell(1, cw + shadow);
+                candidates = piece.cross_range[0][size_t(i0 * kCrossCells + i1)] &
+                             piece.cross_range[1][size_t(j0 * kCrossCells + j1)];
+            } else {
+                candidates = ~uint64_t(0);
+            }
+            const uint64_t below_hi = run_hi >= 64 ? ~uint64_t(0) : (uint64_t(1) << run_hi) - 1;
+            candidates &= below_hi & ~((uint64_t(1) << run_lo) - 1);
+        }
+        const bool by_mask = piece.cross_cells > 0;
+        for (int r = run_lo; by_mask ? candidates != 0 : r < run_hi; ++r) {
+            if (by_mask) {
+                r = __builtin_ctzll(candidates);
+                candidates &= candidates - 1;
+            }
             const int a = int(order[r]);
             const double plane = glm::dot(n, w.tool_world[a] - p0);
             if (plane > reach || plane < -back) continue;

@@ -12,6 +12,7 @@
 #include "sulcus/engine/scene_file.h"
 #include "sulcus/engine/types.h"
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -114,6 +115,8 @@ struct ModelObject {
 };
 
 inline constexpr int kToolCapsules = 4;
+// Cells per side of a piece's grid across its axis (ToolPiece::cross_mask).
+inline constexpr int kCrossCells = 16;
 // Pieces a tool may have (the step keeps per-piece scratch of this size).
 inline constexpr int kMaxToolPieces = 16;
 
@@ -149,6 +152,23 @@ struct ToolPiece {
     // order along it are ModelTool::axial_vertices[vertex_begin, + vertex_count), at
     // axial_coords (m): a ball around a point holds only the vertices of one run of them.
     Vec3 axis{0.0, 0.0, 1.0};
+    // Across the axis: unit vectors cross_u and cross_w (tool frame) perpendicular to it and to
+    // each other, each cut into kCrossCells slabs over the piece's extent along it (the lowest
+    // at cross_lo_m, each cross_cell_m thick). cross_range[k][i0 * kCrossCells + i1] has bit r
+    // set when the vertex r-th along the axis (axial_vertices) lies in slabs i0 to i1 along
+    // cross vector k. A ball holds no vertex outside the slabs its shadow meets along either,
+    // nor outside its axial run: the three masks together leave the few it may hold. cross_cells
+    // is 0 for a piece of over 64 vertices (the run alone then).
+    Vec3 cross_u{1.0, 0.0, 0.0}, cross_w{0.0, 1.0, 0.0};
+    std::array<double, 2> cross_lo_m{}, cross_cell_m{};
+    int cross_cells = 0;
+    std::array<std::array<uint64_t, kCrossCells * kCrossCells>, 2> cross_range{};
+    // The cell along cross axis k (0: cross_u, 1: cross_w) of coordinate c (m) there, clamped to
+    // the grid. Monotonic in c, so a range of coordinates meets the cells between its ends'.
+    int cross_cell(int k, double c) const {
+        const double x = std::floor((c - cross_lo_m[size_t(k)]) / cross_cell_m[size_t(k)]);
+        return !(x > 0.0) ? 0 : x >= kCrossCells - 1 ? kCrossCells - 1 : int(x);
+    }
     // Certified at build (closed, strictly convex, every vertex a corner or inside a flat face):
     // the vertex least along a direction is found by descending along the corners
     // (ModelTool::neighbours), not by looking at every vertex.
