@@ -378,8 +378,22 @@ double capsule_sphere_lower(const Vec3& p0, const Vec3& p1, double r, const Tria
 // along that line between the centre's projection and the capsule's stretch, less the radii. The
 // capsule the centre projects into is measured first; a capsule whose gap alone puts it over that
 // (by a nanometre, for rounding) cannot give the least bound nor tie it, and is not measured.
-double piece_capsule_bound(const ToolPiece& piece, const Vec3* axis, const Vec3& a, const Vec3& b, const Vec3& c,
-                           const Vec3& n, int& nearest) {
+//
+// `line` is the chain's line (capsule_line of the piece and its capsules `axis`), the same for
+// every triangle measured at one placement.
+struct CapsuleLine {
+    Vec3 chain;     // from the chain's first point to its last
+    double length;  // its length
+    double stretch; // each capsule's share of it
+};
+CapsuleLine capsule_line(const ToolPiece& piece, const Vec3* axis) {
+    const Vec3 chain = axis[piece.capsule_count] - axis[0];
+    const double length = glm::length(chain);
+    return {chain, length, length / piece.capsule_count};
+}
+
+double piece_capsule_bound(const ToolPiece& piece, const Vec3* axis, const CapsuleLine& line, const Vec3& a,
+                           const Vec3& b, const Vec3& c, const Vec3& n, int& nearest) {
     const TriangleSphere ts = triangle_sphere(a, b, c);
     const int count = piece.capsule_count;
     auto capsule = [&](int j) {
@@ -389,12 +403,10 @@ double piece_capsule_bound(const ToolPiece& piece, const Vec3* axis, const Vec3&
         if (h0 * h1 > 0.0) bj = std::max(bj, std::min(std::abs(h0), std::abs(h1)) - r);
         return bj;
     };
-    const Vec3 chain = axis[count] - axis[0];
-    const double length = glm::length(chain);
-    const double along = length > 0.0 ? glm::dot(ts.centre - axis[0], chain) / length : 0.0;
-    const double stretch = length / count;
+    const double length = line.length, stretch = line.stretch;
+    const double along = length > 0.0 ? glm::dot(ts.centre - axis[0], line.chain) / length : 0.0;
     auto gap_bound = [&](int j) {
-        const double gap = std::max({0.0, j * stretch - along, along - (j + 1) * stretch});
+        const double gap = std::max(std::max(0.0, j * stretch - along), along - (j + 1) * stretch);
         return gap - ts.radius - piece.capsule_radii_m[size_t(j)];
     };
     const int first = stretch > 0.0 ? std::clamp(int(std::floor(along / stretch)), 0, count - 1) : 0;
@@ -425,14 +437,14 @@ struct NearVerdict {
     double direction_gap = -1e300;  // DistanceBounds::direction_gap
 };
 
-NearVerdict judge_near(const Model& model, size_t k, const ConvexView& view, const Vec3* axis, const ModelObject& obj,
-                       uint32_t tri, double reach, double tol, bool capsules_only, double cutoff = 0.0,
+NearVerdict judge_near(const Model& model, size_t k, const ConvexView& view, const Vec3* axis,
+                       const CapsuleLine& line, const ModelObject& obj, uint32_t tri, double reach, double tol, bool capsules_only, double cutoff = 0.0,
                        const Vec3* start = nullptr, const GjkSimplex* warm = nullptr) {
     const ToolPiece& piece = model.tool.pieces[k];
     const auto& t = obj.mesh.triangles[tri];
     const Vec3 &a = obj.mesh.vertices[t[0]], &b = obj.mesh.vertices[t[1]], &c = obj.mesh.vertices[t[2]];
     int nearest = 0;
-    const double bound = piece_capsule_bound(piece, axis, a, b, c, obj.topology.triangle_normals[tri], nearest);
+    const double bound = piece_capsule_bound(piece, axis, line, a, b, c, obj.topology.triangle_normals[tri], nearest);
     if (bound > reach) return NearVerdict{false, bound, 1e300};
     if (capsules_only) return NearVerdict{true, bound, 1e300};
     // GJK starts along the line from the triangle to the nearest capsule's axis.
@@ -473,6 +485,7 @@ void start_superset(NearCache& c, size_t k, const Pose& at, const Vec3* axis, do
 bool advance_superset(const Model& model, NearCache& c, long budget) {
     SupersetBuild& b = c.build;
     const ToolPiece& piece = model.tool.pieces[b.piece];
+    const CapsuleLine line = capsule_line(piece, b.axis);
     for (; b.object < model.objects.size(); ++b.object, b.walking = false) {
         const ModelObject& obj = model.objects[b.object];
         if (obj.compliant) continue;
@@ -485,7 +498,7 @@ bool advance_superset(const Model& model, NearCache& c, long budget) {
         const bool done = obj.bvh.walk_capsule_chain(b.walk, budget, [&](uint32_t tri) {
             const auto& t = obj.mesh.triangles[tri];
             int nearest = 0;
-            const double bound = piece_capsule_bound(piece, b.axis, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
+            const double bound = piece_capsule_bound(piece, b.axis, line, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
                                                      obj.mesh.vertices[t[2]], obj.topology.triangle_normals[tri], nearest);
             if (bound > b.radius_m) return true;
             if (b.count >= kNearCacheEntries) {
@@ -690,6 +703,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
             return pr.rho(obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]);
         };
         const Vec3* axis = w.capsule + k * (kToolCapsules + 1);
+        const CapsuleLine line = piece.capsule_count > 0 ? capsule_line(piece, axis) : CapsuleLine{};
         Aabb box;
         for (uint32_t v = piece.vertex_begin; v < piece.vertex_begin + piece.vertex_count; ++v) box.grow(tool_world[v]);
         const ConvexView view = tool_view(model, k, tool_world, w);
@@ -785,7 +799,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                     }
                     ++w.detect_tests;
                     const NearVerdict v =
-                        judge_near(model, k, view, axis, obj, q.tri, tri_reach, tol, false, 2.0 * reach, &q.direction,
+                        judge_near(model, k, view, axis, line, obj, q.tri, tri_reach, tol, false, 2.0 * reach, &q.direction,
                                    &q.simplex);
                     if (v.keep)
                         keep(q.tri, v.lo, v.hi, glm::dot(v.direction, v.direction) > 0.0 ? v.direction : q.direction,
@@ -858,7 +872,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                     }
                     ++w.detect_tests;
                     const NearVerdict v =
-                        judge_near(model, k, view, axis, obj, e.tri, tri_reach, tol, false, 2.0 * reach, &e.direction,
+                        judge_near(model, k, view, axis, line, obj, e.tri, tri_reach, tol, false, 2.0 * reach, &e.direction,
                                    &e.simplex);
                     e.lo = v.lo;
                     e.hi = v.hi;
@@ -878,7 +892,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                 obj.bvh.query_capsule_chain(axis, piece.capsule_radii_m.data(), piece.capsule_count, reach,
                                             [&](uint32_t tri) {
                                                 ++w.detect_tests;
-                                                const NearVerdict v = judge_near(model, k, view, axis, obj, tri,
+                                                const NearVerdict v = judge_near(model, k, view, axis, line, obj, tri,
                                                                                  pr.of(rho_of(obj, tri)), tol, any_only);
                                                 return v.keep ? keep(tri, v.lo, v.hi, v.direction, v.simplex) : true;
                                             });
