@@ -28,10 +28,11 @@ struct SegmentClosest {
 
 // The parameters s on [p0,p1] and t on [q0,q1] of the closest points of the two segments
 // (parallel segments handled), without their distance.
-inline void closest_segment_params(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, double& s,
+// The same from the segments' directions d1 = p1 - p0 and d2 = q1 - q0, w = p0 - q0, and the
+// squared lengths a = d1 . d1 and e = d2 . d2, for a caller that has them.
+inline void closest_segment_params(const Vec3& d1, const Vec3& d2, const Vec3& w, double a, double e, double& s,
                                    double& t) {
-    const Vec3 d1 = p1 - p0, d2 = q1 - q0, w = p0 - q0;
-    const double a = glm::dot(d1, d1), e = glm::dot(d2, d2), f = glm::dot(d2, w);
+    const double f = glm::dot(d2, w);
     s = 0.0;
     t = 0.0;
     if (a <= 0.0 && e <= 0.0) return;
@@ -56,6 +57,11 @@ inline void closest_segment_params(const Vec3& p0, const Vec3& p1, const Vec3& q
         t = 1.0;
         s = std::clamp((b - c) / a, 0.0, 1.0);
     }
+}
+inline void closest_segment_params(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, double& s,
+                                   double& t) {
+    const Vec3 d1 = p1 - p0, d2 = q1 - q0;
+    closest_segment_params(d1, d2, p0 - q0, glm::dot(d1, d1), glm::dot(d2, d2), s, t);
 }
 
 // Closest points of segments [p0,p1] and [q0,q1] (parallel segments handled).

@@ -1390,7 +1390,7 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         // A segment is no closer to the tool edge than the distance from its midpoint less its
         // half length: a cheap bound before the exact closest points.
         const Vec3 mid_o = 0.5 * (v0 + v1);
-        const double near_o = far + 0.5 * glm::length(eo);
+        const double near_o = far + 0.5 * glm::length(eo), eo2 = glm::dot(eo, eo);
         for (int h = 0; h < hits; ++h) {
             const uint32_t te = w.edge_hits[h];
             const Vec3& a0 = w.tool_world[tool.edges[te][0]];
@@ -1402,7 +1402,7 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             if (glm::dot(gap, gap) > near_o * near_o) continue;
             // Closest points at an end of either edge (most pairs): a vertex's atom, not this one.
             double s, t;
-            closest_segment_params(a0, a1, v0, v1, s, t);
+            closest_segment_params(et, eo, a0 - v0, ee, eo2, s, t);
             if (s <= 1e-9 || s >= 1.0 - 1e-9 || t <= 1e-9 || t >= 1.0 - 1e-9) continue;
             if (glm::length((a0 + s * et) - (v0 + t * eo)) > far) continue;
             const Vec3 u = glm::cross(eo, et);
