@@ -296,9 +296,10 @@ std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
             }
             for (int k = 0; k < 2; ++k) {
                 piece.cross_lo_m[size_t(k)] = lo[k];
-                piece.cross_cell_m[size_t(k)] = hi[k] > lo[k] ? (hi[k] - lo[k]) / kCrossCells : 1.0;
+                piece.cross_per_m[size_t(k)] = hi[k] > lo[k] ? kCrossCells / (hi[k] - lo[k]) : 1.0;
             }
             piece.cross_cells = kCrossCells;
+            piece.cross_narrow_m = 0.25 * std::min(hi[0] - lo[0], hi[1] - lo[1]);
             for (int k = 0; k < 2; ++k) {
                 const Vec3 along = k == 0 ? piece.cross_u : piece.cross_w;
                 uint64_t slab[kCrossCells] = {};

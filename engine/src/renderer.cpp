@@ -1067,14 +1067,16 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         const uint32_t* order = tool.axial_vertices.data() + piece.vertex_begin;
         const int run_end = int(piece.vertex_count);
         const int run_lo = int(std::lower_bound(coords, coords + run_end, along - sphere - axial_slack) - coords);
-        const int run_hi = int(std::upper_bound(coords + run_lo, coords + run_end, along + sphere + axial_slack) - coords);
-        // The run's vertices the ball's shadow across the axis may hold (every one of the run
-        // without the grid), in the run's order.
+        const double run_top = along + sphere + axial_slack;
+        // The run's vertices the ball's shadow across the axis may hold, in the run's order: by
+        // the slabs for a ball narrow against the piece (ToolPiece::cross_narrow_m), else the
+        // whole run.
+        const double shadow = sphere + axial_slack;
+        const bool by_mask = shadow < piece.cross_narrow_m;
         uint64_t candidates = 0;
-        if (piece.cross_cells > 0 && run_lo < run_hi) {
+        if (by_mask) {
             const Vec3 c = ts.centre - base.position;
             const double cu = glm::dot(cross_world[nt.piece][0], c), cw = glm::dot(cross_world[nt.piece][1], c);
-            const double shadow = sphere + axial_slack;
             if (std::isfinite(cu) && std::isfinite(cw)) {
                 const int i0 = piece.cross_cell(0, cu - shadow), i1 = piece.cross_cell(0, cu + shadow);
                 const int j0 = piece.cross_cell(1, cw - shadow), j1 = piece.cross_cell(1, cw + shadow);
@@ -1083,13 +1085,13 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             } else {
                 candidates = ~uint64_t(0);
             }
-            const uint64_t below_hi = run_hi >= 64 ? ~uint64_t(0) : (uint64_t(1) << run_hi) - 1;
-            candidates &= below_hi & ~((uint64_t(1) << run_lo) - 1);
+            if (run_lo < 64) candidates &= ~((uint64_t(1) << run_lo) - 1);
+            else candidates = 0;
         }
-        const bool by_mask = piece.cross_cells > 0;
-        for (int r = run_lo; by_mask ? candidates != 0 : r < run_hi; ++r) {
+        for (int r = run_lo; by_mask ? candidates != 0 : r < run_end && coords[r] <= run_top; ++r) {
             if (by_mask) {
                 r = __builtin_ctzll(candidates);
+                if (coords[r] > run_top) break;  // past the run's end, as every later one
                 candidates &= candidates - 1;
             }
             const int a = int(order[r]);

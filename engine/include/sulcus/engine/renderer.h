@@ -154,20 +154,23 @@ struct ToolPiece {
     Vec3 axis{0.0, 0.0, 1.0};
     // Across the axis: unit vectors cross_u and cross_w (tool frame) perpendicular to it and to
     // each other, each cut into kCrossCells slabs over the piece's extent along it (the lowest
-    // at cross_lo_m, each cross_cell_m thick). cross_range[k][i0 * kCrossCells + i1] has bit r
+    // at cross_lo_m, each 1 / cross_per_m thick). cross_range[k][i0 * kCrossCells + i1] has bit r
     // set when the vertex r-th along the axis (axial_vertices) lies in slabs i0 to i1 along
     // cross vector k. A ball holds no vertex outside the slabs its shadow meets along either,
     // nor outside its axial run: the three masks together leave the few it may hold. cross_cells
-    // is 0 for a piece of over 64 vertices (the run alone then).
+    // is 0 for a piece of over 64 vertices (the run alone then). The slabs are worth their
+    // look-up for a ball whose shadow is under cross_narrow_m (m; 0 without them): a quarter of
+    // the piece's narrower extent across.
+    double cross_narrow_m = 0.0;
     Vec3 cross_u{1.0, 0.0, 0.0}, cross_w{0.0, 1.0, 0.0};
-    std::array<double, 2> cross_lo_m{}, cross_cell_m{};
+    std::array<double, 2> cross_lo_m{}, cross_per_m{};
     int cross_cells = 0;
     std::array<std::array<uint64_t, kCrossCells * kCrossCells>, 2> cross_range{};
-    // The cell along cross axis k (0: cross_u, 1: cross_w) of coordinate c (m) there, clamped to
-    // the grid. Monotonic in c, so a range of coordinates meets the cells between its ends'.
+    // The slab along cross vector k (0: cross_u, 1: cross_w) of coordinate c (m) there, clamped
+    // to the slabs. Monotonic in c, so a range of coordinates meets the slabs between its ends'.
     int cross_cell(int k, double c) const {
-        const double x = std::floor((c - cross_lo_m[size_t(k)]) / cross_cell_m[size_t(k)]);
-        return !(x > 0.0) ? 0 : x >= kCrossCells - 1 ? kCrossCells - 1 : int(x);
+        const double x = (c - cross_lo_m[size_t(k)]) * cross_per_m[size_t(k)];
+        return !(x >= 1.0) ? 0 : x >= kCrossCells - 1 ? kCrossCells - 1 : int(x);
     }
     // Certified at build (closed, strictly convex, every vertex a corner or inside a flat face):
     // the vertex least along a direction is found by descending along the corners
