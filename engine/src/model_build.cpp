@@ -279,7 +279,7 @@ std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
             tool.axial_coords.push_back(coord(v));
         }
         if (order.size() <= 64) {
-            // The grid across the axis (ToolPiece::cross_mask), its bits by axial order.
+            // The slabs across the axis (ToolPiece::cross_range), their bits by axial order.
             const Vec3 a = piece.axis;
             const Vec3 e = std::abs(a.x) <= std::abs(a.y) && std::abs(a.x) <= std::abs(a.z) ? Vec3(1.0, 0.0, 0.0)
                            : std::abs(a.y) <= std::abs(a.z)                                   ? Vec3(0.0, 1.0, 0.0)

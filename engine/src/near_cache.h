@@ -205,9 +205,8 @@ struct PieceReach {
 
     // The furthest of a triangle's vertices from the origin (m).
     double rho(const Vec3& a, const Vec3& b, const Vec3& c) const {
-        const double da = glm::dot(a - origin, a - origin), db = glm::dot(b - origin, b - origin),
-                     dc = glm::dot(c - origin, c - origin);
-        return std::sqrt(std::max(std::max(da, db), dc));
+        return std::sqrt(std::max({glm::dot(a - origin, a - origin), glm::dot(b - origin, b - origin),
+                                   glm::dot(c - origin, c - origin)}));
     }
     // The reach of a triangle that far.
     double of(double rho) const {

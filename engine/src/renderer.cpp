@@ -379,21 +379,23 @@ double capsule_sphere_lower(const Vec3& p0, const Vec3& p1, double r, const Tria
 // capsule the centre projects into is measured first; a capsule whose gap alone puts it over that
 // (by a nanometre, for rounding) cannot give the least bound nor tie it, and is not measured.
 //
-// `line` is the chain's line (capsule_line of the piece and its capsules `axis`), the same for
-// every triangle measured at one placement.
+// The capsules come placed with their chain's line (capsule_line), the same for every triangle
+// measured at one placement.
 struct CapsuleLine {
-    Vec3 chain;     // from the chain's first point to its last
-    double length;  // its length
-    double stretch; // each capsule's share of it
+    const Vec3* axis = nullptr;  // the capsules' points (kToolCapsules + 1, world)
+    Vec3 chain{0.0};             // from the chain's first point to its last
+    double length = 0.0;         // its length
+    double stretch = 0.0;        // each capsule's share of it
 };
 CapsuleLine capsule_line(const ToolPiece& piece, const Vec3* axis) {
     const Vec3 chain = axis[piece.capsule_count] - axis[0];
     const double length = glm::length(chain);
-    return {chain, length, length / piece.capsule_count};
+    return {axis, chain, length, length / piece.capsule_count};
 }
 
-double piece_capsule_bound(const ToolPiece& piece, const Vec3* axis, const CapsuleLine& line, const Vec3& a,
-                           const Vec3& b, const Vec3& c, const Vec3& n, int& nearest) {
+double piece_capsule_bound(const ToolPiece& piece, const CapsuleLine& line, const Vec3& a, const Vec3& b,
+                           const Vec3& c, const Vec3& n, int& nearest) {
+    const Vec3* axis = line.axis;
     const TriangleSphere ts = triangle_sphere(a, b, c);
     const int count = piece.capsule_count;
     auto capsule = [&](int j) {
@@ -437,14 +439,15 @@ struct NearVerdict {
     double direction_gap = -1e300;  // DistanceBounds::direction_gap
 };
 
-NearVerdict judge_near(const Model& model, size_t k, const ConvexView& view, const Vec3* axis,
-                       const CapsuleLine& line, const ModelObject& obj, uint32_t tri, double reach, double tol, bool capsules_only, double cutoff = 0.0,
-                       const Vec3* start = nullptr, const GjkSimplex* warm = nullptr) {
+NearVerdict judge_near(const Model& model, size_t k, const ConvexView& view, const CapsuleLine& line,
+                       const ModelObject& obj, uint32_t tri, double reach, double tol, bool capsules_only,
+                       double cutoff = 0.0, const Vec3* start = nullptr, const GjkSimplex* warm = nullptr) {
     const ToolPiece& piece = model.tool.pieces[k];
+    const Vec3* axis = line.axis;
     const auto& t = obj.mesh.triangles[tri];
     const Vec3 &a = obj.mesh.vertices[t[0]], &b = obj.mesh.vertices[t[1]], &c = obj.mesh.vertices[t[2]];
     int nearest = 0;
-    const double bound = piece_capsule_bound(piece, axis, line, a, b, c, obj.topology.triangle_normals[tri], nearest);
+    const double bound = piece_capsule_bound(piece, line, a, b, c, obj.topology.triangle_normals[tri], nearest);
     if (bound > reach) return NearVerdict{false, bound, 1e300};
     if (capsules_only) return NearVerdict{true, bound, 1e300};
     // GJK starts along the line from the triangle to the nearest capsule's axis.
@@ -498,7 +501,7 @@ bool advance_superset(const Model& model, NearCache& c, long budget) {
         const bool done = obj.bvh.walk_capsule_chain(b.walk, budget, [&](uint32_t tri) {
             const auto& t = obj.mesh.triangles[tri];
             int nearest = 0;
-            const double bound = piece_capsule_bound(piece, b.axis, line, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
+            const double bound = piece_capsule_bound(piece, line, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
                                                      obj.mesh.vertices[t[2]], obj.topology.triangle_normals[tri], nearest);
             if (bound > b.radius_m) return true;
             if (b.count >= kNearCacheEntries) {
@@ -799,7 +802,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                     }
                     ++w.detect_tests;
                     const NearVerdict v =
-                        judge_near(model, k, view, axis, line, obj, q.tri, tri_reach, tol, false, 2.0 * reach, &q.direction,
+                        judge_near(model, k, view, line, obj, q.tri, tri_reach, tol, false, 2.0 * reach, &q.direction,
                                    &q.simplex);
                     if (v.keep)
                         keep(q.tri, v.lo, v.hi, glm::dot(v.direction, v.direction) > 0.0 ? v.direction : q.direction,
@@ -872,7 +875,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                     }
                     ++w.detect_tests;
                     const NearVerdict v =
-                        judge_near(model, k, view, axis, line, obj, e.tri, tri_reach, tol, false, 2.0 * reach, &e.direction,
+                        judge_near(model, k, view, line, obj, e.tri, tri_reach, tol, false, 2.0 * reach, &e.direction,
                                    &e.simplex);
                     e.lo = v.lo;
                     e.hi = v.hi;
@@ -892,7 +895,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                 obj.bvh.query_capsule_chain(axis, piece.capsule_radii_m.data(), piece.capsule_count, reach,
                                             [&](uint32_t tri) {
                                                 ++w.detect_tests;
-                                                const NearVerdict v = judge_near(model, k, view, axis, line, obj, tri,
+                                                const NearVerdict v = judge_near(model, k, view, line, obj, tri,
                                                                                  pr.of(rho_of(obj, tri)), tol, any_only);
                                                 return v.keep ? keep(tri, v.lo, v.hi, v.direction, v.simplex) : true;
                                             });

@@ -12,7 +12,6 @@
 #include "sulcus/engine/scene_file.h"
 #include "sulcus/engine/types.h"
 
-#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -115,7 +114,7 @@ struct ModelObject {
 };
 
 inline constexpr int kToolCapsules = 4;
-// Cells per side of a piece's grid across its axis (ToolPiece::cross_mask).
+// Slabs along each of a piece's two directions across its axis (ToolPiece::cross_range).
 inline constexpr int kCrossCells = 16;
 // Pieces a tool may have (the step keeps per-piece scratch of this size).
 inline constexpr int kMaxToolPieces = 16;
