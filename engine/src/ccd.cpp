@@ -44,6 +44,16 @@ CcdResult conservative_advancement(const Model& model, const Pose& base, const d
         };
         double tau = 0.0;
         bool done = false;
+        // Each search starts where the last one for this triangle ended (the triangle has moved
+        // little along the tool since), the first where detect's did: a few iterations each
+        // instead of a search from scratch. Any direction's gap bounds the distance below.
+        Vec3 hint(0.0);
+        GjkSimplex warm{};
+        bool hinted = false;
+        if (glm::dot(nt.direction, nt.direction) > 0.0) {
+            hint = glm::conjugate(glm::normalize(base.orientation)) * nt.direction;
+            hinted = true;
+        }
         for (int it = 0; it < max_iterations && !done; ++it) {
             ++r.tests;
             r.iterations = std::max(r.iterations, it + 1);
@@ -53,7 +63,17 @@ CcdResult conservative_advancement(const Model& model, const Pose& base, const d
             // A distance this large lets the rest of the motion up to the limit go through.
             const double enough = clearance + speed * (limit - tau);
             double d = capsule_lower_bound(view, a, b, c);
-            if (d < enough) d = convex_triangle_distance(view, a, b, c, enough).lower;
+            if (d < enough) {
+                const DistanceBounds db = convex_triangle_distance(view, a, b, c, enough, 1e-13, 64,
+                                                                   hinted ? &hint : nullptr,
+                                                                   warm.count > 0 ? &warm : nullptr);
+                d = db.lower;
+                if (glm::dot(db.direction, db.direction) > 0.0) {
+                    hint = db.direction;
+                    hinted = true;
+                }
+                warm = db.simplex;
+            }
             if (d >= enough) {
                 done = true;
             } else if (d <= clearance) {
