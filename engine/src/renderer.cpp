@@ -252,6 +252,7 @@ struct Workspace {
     uint64_t planes_key[kMaxAtoms];
     uint64_t best_key[kMaxAtoms];
     bool best_box_held = false;  // a bound of the box holds the chosen candidate's answer
+    double best_energy = 0.0;    // the chosen candidate's energy (eq. 3, with its springs')
     // Compliance of the candidate being solved and of the best one: each atom's slack zone
     // (-1: rigid) and the zones' slacks.
     int8_t cand_slot[kMaxAtoms];
@@ -1000,6 +1001,99 @@ bool in_vertex_cone(const ModelObject& obj, uint32_t v, const Vec3& p) {
     return true;
 }
 
+// The feature of triangle `tri` that holds tool vertex a's closest point (its region).
+inline FeatureKey feature_key(const ModelObject& obj, uint16_t object, uint32_t tri, uint32_t a, TriRegion region) {
+    FeatureKey key{a, object, 0, tri};
+    switch (region) {
+        case TriRegion::Face: break;
+        case TriRegion::Edge0: key.type = 1; key.id = obj.topology.triangle_edges[tri][0]; break;
+        case TriRegion::Edge1: key.type = 1; key.id = obj.topology.triangle_edges[tri][1]; break;
+        case TriRegion::Edge2: key.type = 1; key.id = obj.topology.triangle_edges[tri][2]; break;
+        case TriRegion::Vertex0: key.type = 2; key.id = obj.mesh.triangles[tri][0]; break;
+        case TriRegion::Vertex1: key.type = 2; key.id = obj.mesh.triangles[tri][1]; break;
+        case TriRegion::Vertex2: key.type = 2; key.id = obj.mesh.triangles[tri][2]; break;
+    }
+    return key;
+}
+
+// The atoms of tool vertex k.a, at world point `wa`, against the object feature of key k (Table
+// 1 by the feature's convexity); faces `back` behind the vertex or more are across the solid.
+void add_feature_atoms(const Model& model, Workspace& w, const FeatureKey& k, const Vec3& wa, double back) {
+    const ModelObject& obj = model.objects[k.object];
+    if (k.type == 0) {
+        add_atom(w, vf_atom(k.object, k.a, k.id));
+    } else if (k.type == 1) {
+        const MeshEdge& e = obj.topology.edges[k.id];
+        if (e.convexity == Convexity::Flat) {
+            // A flat edge is no feature of the surface: a point beyond one of its triangles
+            // lies over the other (whose face holds it) or beyond both, where another edge
+            // or vertex is the real feature. Only a point right over the edge, which both
+            // triangles report as an edge point, is held by their common plane.
+            const Vec3& v0 = obj.mesh.vertices[e.v[0]];
+            const Vec3 ev = obj.mesh.vertices[e.v[1]] - v0;
+            const double s = glm::clamp(glm::dot(wa - v0, ev) / glm::dot(ev, ev), 0.0, 1.0);
+            const Vec3 off = wa - (v0 + s * ev);
+            const double h = signed_to_plane(obj, e.tri[0], wa);
+            if (glm::dot(off, off) - h * h <= 1e-18 && h >= -back) add_atom(w, vf_atom(k.object, k.a, e.tri[0]));
+        } else if (e.convexity == Convexity::Concave) {
+            // eq. 8: both faces of a concave edge hold at once (Types 3 and 5) for a vertex
+            // resting in the valley. A vertex clearly off it is over one of the faces, whose
+            // own region holds it; their planes reach past the valley and would hold it on
+            // an extended plane.
+            const Vec3& v0 = obj.mesh.vertices[e.v[0]];
+            const Vec3 ev = obj.mesh.vertices[e.v[1]] - v0;
+            const double t = glm::clamp(glm::dot(wa - v0, ev) / glm::dot(ev, ev), 0.0, 1.0);
+            if (glm::length(wa - (v0 + t * ev)) > kOffFeature) return;
+            for (uint32_t tri : e.tri)
+                if (signed_to_plane(obj, tri, wa) >= -back) add_atom(w, vf_atom(k.object, k.a, tri));
+        } else {
+            // Convex edge (Types 2, 8): the face the vertex is in front of while it rests on
+            // the edge; the edge's own plane while it is clearly off it.
+            const Vec3& v0 = obj.mesh.vertices[e.v[0]];
+            const Vec3 ev = obj.mesh.vertices[e.v[1]] - v0;
+            const double t = glm::clamp(glm::dot(wa - v0, ev) / glm::dot(ev, ev), 0.0, 1.0);
+            const Vec3 c = v0 + t * ev;
+            const Vec3 u = wa - c;
+            if (glm::length(u) <= kOffFeature || t <= 0.0 || t >= 1.0) {
+                add_disjunction(model, w, k.object, k.a, wa, e.tri.data(), 2, back);
+            } else {
+                // Only in the edge's normal cone (between its faces' normals) is the edge the
+                // nearest feature; elsewhere the point is over a face, which holds it. The cone's
+                // sides count as in it, to well past rounding: a vertex held on a face's plane
+                // that has slid off the face (the rescue's case) lies on a side.
+                const Vec3& n1 = obj.topology.triangle_normals[e.tri[0]];
+                const Vec3& n2 = obj.topology.triangle_normals[e.tri[1]];
+                const double k12 = glm::dot(n1, n2), u1 = glm::dot(u, n1), u2 = glm::dot(u, n2);
+                const double side = -1e-9 * glm::length(u);
+                if (u1 - k12 * u2 >= side && u2 - k12 * u1 >= side)
+                    add_feature_plane(w, k.object, k.a, wa, c, e.v[0], u1 >= u2 ? e.tri[0] : e.tri[1]);
+            }
+        }
+    } else {
+        const auto& topo = obj.topology;
+        // The vertex is the feature only for points in its Voronoi cone: no incident edge
+        // leans towards the point (else the point is over that edge or a face beyond it,
+        // which another triangle reports).
+        if (!in_vertex_cone(obj, k.id, wa)) return;
+        const uint32_t* tris = topo.vertex_triangles.data() + topo.vertex_triangle_offsets[k.id];
+        const int count = static_cast<int>(topo.vertex_triangle_offsets[k.id + 1] - topo.vertex_triangle_offsets[k.id]);
+        if (topo.vertex_convexity[k.id] == Convexity::Concave) {
+            // eq. 8: every face around a concave vertex (Type 4), for a vertex resting in it.
+            if (glm::length(wa - obj.mesh.vertices[k.id]) > kOffFeature) return;
+            for (int j = 0; j < count; ++j)
+                if (signed_to_plane(obj, tris[j], wa) >= -back) add_atom(w, vf_atom(k.object, k.a, tris[j]));
+        } else if (glm::length(wa - obj.mesh.vertices[k.id]) > kOffFeature) {
+            // Clearly off the vertex, in its Voronoi cone (Type 9): its own plane.
+            int best = 0;
+            for (int j = 1; j < count; ++j)
+                if (signed_to_plane(obj, tris[j], wa) > signed_to_plane(obj, tris[best], wa)) best = j;
+            add_feature_plane(w, k.object, k.a, wa, obj.mesh.vertices[k.id], k.id, tris[best]);
+        } else {
+            add_disjunction(model, w, k.object, k.a, wa, tris, count, back);
+        }
+    }
+}
+
 // gather: the principal-contact atoms of every feature pair within `reach`. The tool may be inside
 // a compliant object by as deep as it is at the base (Workspace::soft) plus the reach: that
 // object's features stay in play that far behind their surface. False when a tool vertex's
@@ -1104,16 +1198,7 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             if (glm::dot(off, off) > sphere * sphere) continue;
             const TriClosest c = closest_on_triangle(w.tool_world[a], p0, p1, p2);
             if (c.distance > far) continue;
-            FeatureKey key{static_cast<uint32_t>(a), nt.object, 0, nt.tri};
-            switch (c.region) {
-                case TriRegion::Face: break;
-                case TriRegion::Edge0: key.type = 1; key.id = obj.topology.triangle_edges[nt.tri][0]; break;
-                case TriRegion::Edge1: key.type = 1; key.id = obj.topology.triangle_edges[nt.tri][1]; break;
-                case TriRegion::Edge2: key.type = 1; key.id = obj.topology.triangle_edges[nt.tri][2]; break;
-                case TriRegion::Vertex0: key.type = 2; key.id = t[0]; break;
-                case TriRegion::Vertex1: key.type = 2; key.id = t[1]; break;
-                case TriRegion::Vertex2: key.type = 2; key.id = t[2]; break;
-            }
+            const FeatureKey key = feature_key(obj, nt.object, nt.tri, uint32_t(a), c.region);
             if (obj.compliant) {
                 // Sorted out below: the tool may be inside a compliant object.
                 if (w.inside_count < kMaxFeatures)
@@ -1181,81 +1266,8 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         std::sort(w.feats, w.feats + w.feat_count);
         w.feat_count = static_cast<int>(std::unique(w.feats, w.feats + w.feat_count) - w.feats);
     }
-    for (int i = 0; i < w.feat_count; ++i) {
-        const FeatureKey& k = w.feats[i];
-        const ModelObject& obj = model.objects[k.object];
-        const Vec3& wa = w.tool_world[k.a];
-        const double back = back_of(k.object);
-        if (k.type == 0) {
-            add_atom(w, vf_atom(k.object, k.a, k.id));
-        } else if (k.type == 1) {
-            const MeshEdge& e = obj.topology.edges[k.id];
-            if (e.convexity == Convexity::Flat) {
-                // A flat edge is no feature of the surface: a point beyond one of its triangles
-                // lies over the other (whose face holds it) or beyond both, where another edge
-                // or vertex is the real feature. Only a point right over the edge, which both
-                // triangles report as an edge point, is held by their common plane.
-                const Vec3& v0 = obj.mesh.vertices[e.v[0]];
-                const Vec3 ev = obj.mesh.vertices[e.v[1]] - v0;
-                const double s = glm::clamp(glm::dot(wa - v0, ev) / glm::dot(ev, ev), 0.0, 1.0);
-                const Vec3 off = wa - (v0 + s * ev);
-                const double h = signed_to_plane(obj, e.tri[0], wa);
-                if (glm::dot(off, off) - h * h <= 1e-18 && h >= -back) add_atom(w, vf_atom(k.object, k.a, e.tri[0]));
-            } else if (e.convexity == Convexity::Concave) {
-                // eq. 8: both faces of a concave edge hold at once (Types 3 and 5) for a vertex
-                // resting in the valley. A vertex clearly off it is over one of the faces, whose
-                // own region holds it; their planes reach past the valley and would hold it on
-                // an extended plane.
-                const Vec3& v0 = obj.mesh.vertices[e.v[0]];
-                const Vec3 ev = obj.mesh.vertices[e.v[1]] - v0;
-                const double t = glm::clamp(glm::dot(wa - v0, ev) / glm::dot(ev, ev), 0.0, 1.0);
-                if (glm::length(wa - (v0 + t * ev)) > kOffFeature) continue;
-                for (uint32_t tri : e.tri)
-                    if (signed_to_plane(obj, tri, wa) >= -back) add_atom(w, vf_atom(k.object, k.a, tri));
-            } else {
-                // Convex edge (Types 2, 8): the face the vertex is in front of while it rests on
-                // the edge; the edge's own plane while it is clearly off it.
-                const Vec3& v0 = obj.mesh.vertices[e.v[0]];
-                const Vec3 ev = obj.mesh.vertices[e.v[1]] - v0;
-                const double t = glm::clamp(glm::dot(wa - v0, ev) / glm::dot(ev, ev), 0.0, 1.0);
-                const Vec3 c = v0 + t * ev;
-                const Vec3 u = wa - c;
-                if (glm::length(u) <= kOffFeature || t <= 0.0 || t >= 1.0) {
-                    add_disjunction(model, w, k.object, k.a, wa, e.tri.data(), 2, back);
-                } else {
-                    // Only in the edge's normal cone (between its faces' normals) is the edge the
-                    // nearest feature; elsewhere the point is over a face, which holds it.
-                    const Vec3& n1 = obj.topology.triangle_normals[e.tri[0]];
-                    const Vec3& n2 = obj.topology.triangle_normals[e.tri[1]];
-                    const double k12 = glm::dot(n1, n2), u1 = glm::dot(u, n1), u2 = glm::dot(u, n2);
-                    if (u1 - k12 * u2 >= 0.0 && u2 - k12 * u1 >= 0.0)
-                        add_feature_plane(w, k.object, k.a, wa, c, e.v[0], u1 >= u2 ? e.tri[0] : e.tri[1]);
-                }
-            }
-        } else {
-            const auto& topo = obj.topology;
-            // The vertex is the feature only for points in its Voronoi cone: no incident edge
-            // leans towards the point (else the point is over that edge or a face beyond it,
-            // which another triangle reports).
-            if (!in_vertex_cone(obj, k.id, wa)) continue;
-            const uint32_t* tris = topo.vertex_triangles.data() + topo.vertex_triangle_offsets[k.id];
-            const int count = static_cast<int>(topo.vertex_triangle_offsets[k.id + 1] - topo.vertex_triangle_offsets[k.id]);
-            if (topo.vertex_convexity[k.id] == Convexity::Concave) {
-                // eq. 8: every face around a concave vertex (Type 4), for a vertex resting in it.
-                if (glm::length(wa - obj.mesh.vertices[k.id]) > kOffFeature) continue;
-                for (int j = 0; j < count; ++j)
-                    if (signed_to_plane(obj, tris[j], wa) >= -back) add_atom(w, vf_atom(k.object, k.a, tris[j]));
-            } else if (glm::length(wa - obj.mesh.vertices[k.id]) > kOffFeature) {
-                // Clearly off the vertex, in its Voronoi cone (Type 9): its own plane.
-                int best = 0;
-                for (int j = 1; j < count; ++j)
-                    if (signed_to_plane(obj, tris[j], wa) > signed_to_plane(obj, tris[best], wa)) best = j;
-                add_feature_plane(w, k.object, k.a, wa, obj.mesh.vertices[k.id], k.id, tris[best]);
-            } else {
-                add_disjunction(model, w, k.object, k.a, wa, tris, count, back);
-            }
-        }
-    }
+    for (int i = 0; i < w.feat_count; ++i)
+        add_feature_atoms(model, w, w.feats[i], w.tool_world[w.feats[i].a], back_of(w.feats[i].object));
 
     // Convex (and mixed) object vertices against tool faces (F-V, Type 11): outside the face of
     // each piece most in front. One face that has the vertex beyond the reach puts the most in
@@ -2080,6 +2092,21 @@ void carry_planes(const Model& model, const State& state, double reach, Workspac
     w.plane_count = w.cand_count;
 }
 
+// The candidate just solved (w.cand and its solution `cr`) becomes the chosen one (w.best).
+void keep_candidate(const Model& model, const CandidateResult& cr, Workspace& w, StepStats& stats, double x_out[6]) {
+    for (int j = 0; j < 6; ++j) x_out[j] = cr.x[j];
+    stats.relinearizations = cr.relinearizations;
+    stats.constraint_error_m = cr.error;
+    w.best_box_held = cr.box_held;
+    w.best_energy = cr.energy;
+    w.best_count = w.cand_count;
+    std::copy(w.cand, w.cand + w.cand_count, w.best);
+    std::copy(w.cand_slot, w.cand_slot + w.cand_count, w.best_slot);
+    std::copy(w.cand_key, w.cand_key + w.cand_count, w.best_key);
+    w.best_slacks = w.slacks;
+    if (model.any_friction) w.best_friction = w.friction;
+}
+
 // solve + select: every candidate set within the box; the feasible one of least energy wins
 // (ties keep the lower index, for determinism). Leaves the winner's atoms in w.best.
 //
@@ -2151,16 +2178,7 @@ bool solve_candidates(const Model& model, const Pose& base, const Mat3& frame, c
         if (cr.ok && cr.energy < best_energy) {
             best_energy = cr.energy;
             found = true;
-            for (int j = 0; j < 6; ++j) x_out[j] = cr.x[j];
-            stats.relinearizations = cr.relinearizations;
-            stats.constraint_error_m = cr.error;
-            w.best_box_held = cr.box_held;
-            w.best_count = w.cand_count;
-            std::copy(w.cand, w.cand + w.cand_count, w.best);
-            std::copy(w.cand_slot, w.cand_slot + w.cand_count, w.best_slot);
-            std::copy(w.cand_key, w.cand_key + w.cand_count, w.best_key);
-            w.best_slacks = w.slacks;
-            if (model.any_friction) w.best_friction = w.friction;
+            keep_candidate(model, cr, w, stats, x_out);
         }
     }
     if (found) stats.atoms = w.best_count;
@@ -2263,61 +2281,76 @@ struct ContactCheck {
     bool any_virtual = false;
 };
 
+// The distance between the features of atom `a` with the tool at `at`: its tool vertex and object
+// triangle, its object vertex and the tool's surface, its two edges. The tool's triangles are
+// searched until one is within `enough` of the object vertex: those on the atom's own face plane
+// first, where the vertex mostly touches (enough < 0: all of them).
+double feature_distance(const Model& model, const Atom& a, const ToolPoseAt& at, double enough) {
+    const ModelTool& tool = model.tool;
+    const ModelObject& o = model.objects[a.object];
+    if (a.kind == AtomKind::VertexFace || a.kind == AtomKind::FixedAxis) {
+        const auto& t = o.mesh.triangles[a.object_triangle];
+        return closest_on_triangle(at.p + at.R * tool.mesh.vertices[a.tool_vertex], o.mesh.vertices[t[0]],
+                                   o.mesh.vertices[t[1]], o.mesh.vertices[t[2]]).distance;
+    }
+    if (a.kind == AtomKind::FaceVertex) {
+        double d = 1e300;
+        const Vec3 v = glm::transpose(at.R) * (o.mesh.vertices[a.object_vertex] - at.p);  // tool frame
+        auto to_triangle = [&](const std::array<uint32_t, 3>& t) {
+            return closest_on_triangle(v, tool.mesh.vertices[t[0]], tool.mesh.vertices[t[1]],
+                                       tool.mesh.vertices[t[2]]).distance;
+        };
+        if (enough >= 0.0) {
+            const Vec3& fn = tool.face_normals[a.tool_face];
+            for (size_t t = 0; t < tool.mesh.triangles.size() && d > enough; ++t)
+                if (glm::dot(tool.topology.triangle_normals[t], fn) > 1.0 - 1e-9)
+                    d = std::min(d, to_triangle(tool.mesh.triangles[t]));
+            if (d <= enough) return d;
+        }
+        for (const auto& t : tool.mesh.triangles) d = std::min(d, to_triangle(t));
+        return d;
+    }
+    const auto& te = tool.edges[a.tool_edge];
+    const MeshEdge& e = o.topology.edges[a.object_edge];
+    return closest_segments(at.p + at.R * tool.mesh.vertices[te[0]], at.p + at.R * tool.mesh.vertices[te[1]],
+                            o.mesh.vertices[e.v[0]], o.mesh.vertices[e.v[1]]).distance;
+}
+
+// Whether touching atom `a` (within 2 tolerances of zero at `at`, `give` into its compliant zone)
+// is a real contact: its features themselves meet. It is virtual when it holds the tool on an
+// extended plane.
+bool contact_is_real(const Model& model, const Atom& a, const ToolPoseAt& at, double give) {
+    const double tol = model.settings.constraint_tol_m;
+    const ModelObject& o = model.objects[a.object];
+    // Without give the contact is real when the features are within the tolerance.
+    const double d = feature_distance(model, a, at, give == 0.0 ? 10.0 * tol : -1.0);
+    // In a compliant zone the tool is `give` inside the surface it touches. That surface is
+    // every face of the zone moved in, not one face's plane, so the contact is real too when
+    // the feature is deeper than `give` in the other, or when the tool vertex is within
+    // `give` of any face of the object. A separating plane of the guard holds the piece off
+    // its triangle: real when the piece meets the triangle, wherever the vertex on the plane
+    // is (a long tool's edge laid across the face).
+    bool real = std::abs(d - give) <= 10.0 * tol;
+    if (!real && o.compliant && give > 0.0) {
+        real = d < give;
+        if (!real && (a.kind == AtomKind::VertexFace || a.kind == AtomKind::FixedAxis))
+            real = near_surface(o, at.p + at.R * model.tool.mesh.vertices[a.tool_vertex], give + 10.0 * tol);
+        if (!real && a.kind == AtomKind::FixedAxis)
+            real = piece_meets_triangle(model, a.tool_vertex, o, a.object_triangle, at, give + 10.0 * tol);
+    }
+    return real;
+}
+
 ContactCheck check_contacts(const Model& model, const Pose& base, const double x[6], const Workspace& w) {
     const double tol = model.settings.constraint_tol_m;
     const ToolPoseAt at = tool_pose_at(base, x);
-    const ModelTool& tool = model.tool;
     ContactCheck c;
     bool touching = false;
     for (int i = 0; i < w.best_count; ++i) {
-        const Atom& a = w.best[i];
         double give = 0.0;
         if (best_value(model, w, i, at, &give) > 2.0 * tol) continue;
         touching = true;
-        const ModelObject& o = model.objects[a.object];
-        double d = 0.0;
-        if (a.kind == AtomKind::VertexFace || a.kind == AtomKind::FixedAxis) {
-            const auto& t = o.mesh.triangles[a.object_triangle];
-            d = closest_on_triangle(at.p + at.R * tool.mesh.vertices[a.tool_vertex], o.mesh.vertices[t[0]],
-                                    o.mesh.vertices[t[1]], o.mesh.vertices[t[2]]).distance;
-        } else if (a.kind == AtomKind::FaceVertex) {
-            d = 1e300;
-            const Vec3 v = glm::transpose(at.R) * (o.mesh.vertices[a.object_vertex] - at.p);  // tool frame
-            auto to_triangle = [&](const std::array<uint32_t, 3>& t) {
-                return closest_on_triangle(v, tool.mesh.vertices[t[0]], tool.mesh.vertices[t[1]],
-                                           tool.mesh.vertices[t[2]]).distance;
-            };
-            // Without give the contact is real when some triangle is within the tolerance: the
-            // triangles on the atom's own face plane first, where the vertex mostly touches.
-            if (give == 0.0) {
-                const Vec3& fn = tool.face_normals[a.tool_face];
-                for (size_t t = 0; t < tool.mesh.triangles.size() && d > 10.0 * tol; ++t)
-                    if (glm::dot(tool.topology.triangle_normals[t], fn) > 1.0 - 1e-9)
-                        d = std::min(d, to_triangle(tool.mesh.triangles[t]));
-            }
-            if (!(d <= 10.0 * tol && give == 0.0))
-                for (const auto& t : tool.mesh.triangles) d = std::min(d, to_triangle(t));
-        } else if (a.kind == AtomKind::EdgeEdge) {
-            const auto& te = tool.edges[a.tool_edge];
-            const MeshEdge& e = o.topology.edges[a.object_edge];
-            d = closest_segments(at.p + at.R * tool.mesh.vertices[te[0]], at.p + at.R * tool.mesh.vertices[te[1]],
-                                 o.mesh.vertices[e.v[0]], o.mesh.vertices[e.v[1]]).distance;
-        }
-        // In a compliant zone the tool is `give` inside the surface it touches. That surface is
-        // every face of the zone moved in, not one face's plane, so the contact is real too when
-        // the feature is deeper than `give` in the other, or when the tool vertex is within
-        // `give` of any face of the object. A separating plane of the guard holds the piece off
-        // its triangle: real when the piece meets the triangle, wherever the vertex on the plane
-        // is (a long tool's edge laid across the face).
-        bool real = std::abs(d - give) <= 10.0 * tol;
-        if (!real && o.compliant && give > 0.0) {
-            real = d < give;
-            if (!real && (a.kind == AtomKind::VertexFace || a.kind == AtomKind::FixedAxis))
-                real = near_surface(o, at.p + at.R * tool.mesh.vertices[a.tool_vertex], give + 10.0 * tol);
-            if (!real && a.kind == AtomKind::FixedAxis)
-                real = piece_meets_triangle(model, a.tool_vertex, o, a.object_triangle, at, give + 10.0 * tol);
-        }
-        if (real) c.real = true;
+        if (contact_is_real(model, w.best[i], at, give)) c.real = true;
         else c.any_virtual = true;
     }
     c.virtual_only = touching && !c.real;
@@ -2387,6 +2420,149 @@ bool apply_friction(const Model& model, const State& state, const Pose& base, co
     std::copy(w.cand_key, w.cand_key + w.cand_count, w.best_key);
     w.best_slacks = w.slacks;
     return true;
+}
+
+// A probe sliding over a dense mesh often ends a tick with a vertex slid past the edge of the
+// face whose plane holds it, or an object vertex slid off the tool face whose plane holds it: a
+// virtual contact, which another pass of the stages would take round the feature. Within the
+// pass, more cheaply: each such atom (a gathered V-F atom, feature plane or F-V atom of a rigid
+// object) is swapped for what gather would find at the solution -- the atoms of the features the
+// tool vertex faces among the pass's near triangles, or the tool face the object vertex is most in
+// front of -- and the set is solved again in the same box, with the same guard, up to
+// kRescueRounds times while the answer still has such contacts. Across a convex feature the free
+// space is the union of its faces' half-spaces, and the answer held on the slid-past plane meets
+// the swapped-in constraint there (to the tolerance), so each round's answer has no more energy
+// than the tolerance allows; it becomes the chosen one. A round whose answer has more (the
+// swapped-in plane holds the tool back, as a corner's plane from where the tool started) ends the
+// rescue, as does one still virtual without less energy. True when the answer's contacts are all
+// real; else the next pass takes on the
+// answer reached (E-E atoms, the guard's planes and compliant objects are left to it).
+constexpr int kRescueRounds = 3;
+
+bool rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, const double target[6],
+                    const double target_local[6], const double lower[6], const double upper[6], double reach,
+                    const State& state, Workspace& w, StepStats& stats, double x_sol[6]) {
+    const double tol = model.settings.constraint_tol_m;
+    const ModelTool& tool = model.tool;
+    // The atoms swapped out so far: one that comes back (a vertex sent to and fro across a
+    // valley of the surface, each face's plane holding it over the other) is held with the one
+    // it would replace, as both faces of a concave edge hold a vertex in the valley (eq. 8).
+    constexpr int kMaxGone = 16;
+    Atom gone[kMaxGone];
+    int gone_count = 0;
+    for (int round = 0; round < kRescueRounds; ++round) {
+        const ToolPoseAt at = tool_pose_at(base, x_sol);
+        // The chosen set's real and untouching atoms stay; the virtual ones are swapped.
+        constexpr int kMaxSwapped = 8;
+        int swapped[kMaxSwapped];
+        int swap_count = 0;
+        w.cand_count = 0;
+        for (int i = 0; i < w.best_count; ++i) {
+            double give = 0.0;
+            const Atom& a = w.best[i];
+            if (best_value(model, w, i, at, &give) > 2.0 * tol || contact_is_real(model, a, at, give)) {
+                w.cand_key[w.cand_count] = w.best_key[i];
+                w.cand[w.cand_count++] = a;
+                continue;
+            }
+            const bool swappable = w.best_key[i] == 0 && a.kind != AtomKind::EdgeEdge && !model.objects[a.object].compliant;
+            if (!swappable || swap_count == kMaxSwapped) return false;
+            swapped[swap_count++] = i;
+        }
+        if (swap_count == 0) return false;  // a round's answer with a virtual contact that cannot be swapped
+        auto append = [&](const Atom& a) {
+            for (int j = 0; j < w.cand_count; ++j)
+                if (w.cand[j].same_as(a)) return;
+            if (w.cand_count == kMaxAtoms) return;
+            w.cand_key[w.cand_count] = 0;
+            w.cand[w.cand_count++] = a;
+        };
+        for (int s = 0; s < swap_count; ++s) {
+            const Atom& a = w.best[swapped[s]];
+            if (a.kind == AtomKind::FaceVertex) {
+                // The tool face of the same piece the object vertex is most in front of now.
+                size_t k = 0;
+                while (k + 1 < tool.pieces.size() && a.tool_face >= tool.pieces[k].face_begin + tool.pieces[k].face_count) ++k;
+                const ToolPiece& piece = tool.pieces[k];
+                const Vec3 v = glm::transpose(at.R) * (model.objects[a.object].mesh.vertices[a.object_vertex] - at.p);
+                uint32_t best = a.tool_face;
+                double best_s = -1e300;
+                for (uint32_t f = piece.face_begin; f < piece.face_begin + piece.face_count; ++f) {
+                    const double sf = glm::dot(tool.face_normals[f], v) - tool.face_offsets[f];
+                    if (sf > best_s) {
+                        best_s = sf;
+                        best = f;
+                    }
+                }
+                if (best == a.tool_face) return false;
+                Atom swap = a;
+                swap.tool_face = best;
+                for (int g = 0; g < gone_count; ++g)
+                    if (gone[g].same_as(swap)) append(a);
+                append(swap);
+                if (gone_count < kMaxGone) gone[gone_count++] = a;
+                continue;
+            }
+            // The features the tool vertex faces now, among the near triangles of its piece, as
+            // gather finds them (its atoms are added after w.atoms and taken from there).
+            const uint32_t tv = a.tool_vertex;
+            const Vec3 wa = at.p + at.R * tool.mesh.vertices[tv];
+            constexpr int kMaxKeys = 32;
+            FeatureKey keys[kMaxKeys];
+            int key_count = 0;
+            for (int i = 0; i < w.near_count; ++i) {
+                const NearTri& nt = w.near[i];
+                const ModelObject& obj = model.objects[nt.object];
+                if (nt.piece != tool.vertex_piece[tv] || obj.compliant) continue;
+                const auto& t = obj.mesh.triangles[nt.tri];
+                const Vec3& p0 = obj.mesh.vertices[t[0]];
+                const double plane = glm::dot(obj.topology.triangle_normals[nt.tri], wa - p0);
+                if (plane > reach || plane < -kBackFace) continue;
+                const TriClosest c = closest_on_triangle(wa, p0, obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]);
+                if (c.distance > reach) continue;
+                if (key_count == kMaxKeys) return false;
+                keys[key_count++] = feature_key(obj, nt.object, nt.tri, tv, c.region);
+            }
+            std::sort(keys, keys + key_count);
+            key_count = int(std::unique(keys, keys + key_count) - keys);
+            const int atom_count = w.atom_count, alt_count = w.alt_count;
+            const bool gather_full = w.gather_full;
+            for (int k = 0; k < key_count; ++k) add_feature_atoms(model, w, keys[k], wa, kBackFace);
+            bool back = false;
+            for (int k = atom_count; k < w.atom_count; ++k)
+                for (int g = 0; g < gone_count; ++g) back |= gone[g].same_as(w.atoms[k]);
+            if (back) append(a);
+            for (int k = atom_count; k < w.atom_count; ++k) append(w.atoms[k]);
+            if (gone_count < kMaxGone) gone[gone_count++] = a;
+            w.atom_count = atom_count;
+            w.alt_count = alt_count;
+            w.gather_full = gather_full;
+        }
+        ++stats.candidates;
+        const CandidateResult cr = solve_candidate(model, base, frame, target, target_local, lower, upper, reach,
+                                                   state.active, state.active_count, w, stats);
+        if (!cr.ok) return false;
+        // Every contact real: taken with no more energy than the tolerance's give allows (the
+        // swapped-in plane meets the slid-past answer to the tolerance, not exactly: the tool may
+        // rise by a few tolerances). Still virtual: taken on for another round only with less.
+        const ToolPoseAt nx = tool_pose_at(base, cr.x);
+        bool real = true;
+        for (int i = 0; i < w.cand_count && real; ++i) {
+            const int slot = w.cand_slot[i];
+            double give = 0.0;
+            real = value_with_give(model, w.cand[i], nx, slot, slot < 0 ? 0.0 : w.slacks.depth[slot], &give) > 2.0 * tol ||
+                   contact_is_real(model, w.cand[i], nx, give);
+        }
+        const double lift = 4.0 * tol, w_t = model.settings.haptic.weight_translational;
+        const double allowed = real ? w.best_energy + 2.0 * std::sqrt(2.0 * w.best_energy * w_t) * lift + w_t * lift * lift
+                                    : w.best_energy;
+        if (!(cr.energy <= allowed)) return false;
+        keep_candidate(model, cr, w, stats, x_sol);
+        stats.atoms = w.best_count;
+        ++stats.rescues;
+        if (real) return true;
+    }
+    return false;
 }
 
 }  // namespace
@@ -2576,6 +2752,11 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             // reaches much further (the energy bound lets the tool turn far): lifting the probe
             // out of the tissue it brought in thousands of gingiva triangles.
             checked_valid = false;
+            if (solved && S.rescue_virtual && contacts().any_virtual) {
+                rescue_virtual(model, base, frame, target, target_local, rate_lower, rate_upper, reach, state, w,
+                               res.stats, x_sol);
+                checked_valid = false;
+            }
             const ContactCheck cc = solved ? contacts() : ContactCheck{};
             bool at_target = solved;
             for (int j = 0; j < 6 && at_target; ++j) at_target = x_sol[j] == target[j];

@@ -76,6 +76,12 @@ struct RendererSettings {
     // plane may hold the tool where a plane found anew would be found for a nearby triangle), not
     // what they guarantee.
     bool carry_planes = true;
+    // Take a solution's virtual contacts (a vertex slid past the edge of the rigid face whose
+    // plane holds it) round the feature within the pass: the atom is swapped for those of the
+    // features the vertex faces at the solution and the set solved again, in place of another
+    // pass of detect, gather and solve. Off: another pass. Changes the step's answers (the other
+    // atoms stay as gathered at the pass's start), not what they guarantee.
+    bool rescue_virtual = true;
     qp::Settings qp;
 };
 
@@ -326,6 +332,8 @@ struct StepStats {
     // Extra passes of the stages this tick because a solution's contact was not real (held on
     // the extended plane of a face or the line of an edge past its end).
     int passes = 0;
+    // Virtual contacts taken round within a pass instead (RendererSettings::rescue_virtual).
+    int rescues = 0;
     // Gather found more tool-vertex features or atoms than it holds (deep in a compliant
     // object): the rest were left out, and the guard held the tool off what they would have.
     bool gather_truncated = false;
