@@ -161,6 +161,34 @@ TEST(Renderer, ConvexEdgeGivesTheLocalSolution) {
     }
 }
 
+// The force-continuity box holds the tool short of the floor it presses on. Within the contact
+// distance of it the tool is in contact (as the step counts contacts) and stays where the box
+// holds it, the force continuous; further off, touching nothing, it is released onto the floor.
+TEST(Renderer, AToolHeldWithinTheContactDistanceIsNotReleased) {
+    FloorScene s;
+    RendererSettings settings;
+    settings.force_step_margin_m = 0.3e-6;  // the box lets the tool move 0.17 um a tick
+    auto model = model_of(s.tool, {object("floor", s.floor)}, settings);
+    const double room = settings.force_step_margin_m / std::sqrt(3.0);
+    const Pose haptic = pose(Vec3(0, 4 * mm, 0));  // pressing 1 mm into the floor, not moving
+    for (const double above : {0.5e-6, 5e-6}) {
+        State st = make_state(pose(Vec3(0, 5 * mm + above, 0)));
+        st.last_haptic = haptic;
+        const StepResult r = step(*model, st, haptic);
+        const double gap = r.graphic.position.y - 5 * mm;
+        EXPECT_LE(s.penetration(r.graphic), 1e-7) << above;
+        if (above < settings.contact_distance_m) {
+            EXPECT_FALSE(r.stats.released) << above;
+            EXPECT_EQ(r.status, StepStatus::Contact) << above;
+            EXPECT_NEAR(gap, above - room, 1e-12) << above;
+        } else {
+            EXPECT_TRUE(r.stats.released) << above;
+            EXPECT_EQ(r.status, StepStatus::Contact) << above;
+            EXPECT_LE(std::abs(gap), 2 * settings.constraint_tol_m) << above;
+        }
+    }
+}
+
 // The same scene turned as a whole gives the same motion turned (the default step works in the
 // tool's frame); the paper's box, on the world axes, does not have this property.
 TEST(Renderer, RigidMotionOfTheWholeSceneChangesNothing) {

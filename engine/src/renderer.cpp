@@ -2760,7 +2760,18 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             const ContactCheck cc = solved ? contacts() : ContactCheck{};
             bool at_target = solved;
             for (int j = 0; j < 6 && at_target; ++j) at_target = x_sol[j] == target[j];
-            const bool released = solved && !cc.real && !cc.virtual_only && !at_target;
+            // Within the contact distance of a rigid object's feature that a gathered atom holds
+            // it off, the tool is in contact (as the step counts contacts), though not touching
+            // to the tolerance: it is not released.
+            bool in_contact = false;
+            if (solved && !cc.real && !cc.virtual_only && !at_target) {
+                const ToolPoseAt at = tool_pose_at(base, x_sol);
+                for (int i = 0; i < w.best_count && !in_contact; ++i)
+                    in_contact = w.best_key[i] == 0 && !model.objects[w.best[i].object].compliant &&
+                                 best_value(model, w, i, at) <= S.contact_distance_m &&
+                                 feature_distance(model, w.best[i], at, S.contact_distance_m) <= S.contact_distance_m;
+            }
+            const bool released = solved && !cc.real && !cc.virtual_only && !at_target && !in_contact;
             if (released) {
                 res.stats.released = true;
                 double straight_lo[6], straight_hi[6];
