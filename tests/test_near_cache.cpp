@@ -44,10 +44,11 @@ cli::BenchScene load(const std::string& name) {
     return s.scenes.empty() ? cli::BenchScene{} : std::move(s.scenes.front());
 }
 
-std::unique_ptr<Model> model_for(const cli::BenchScene& b, bool near_cache) {
+std::unique_ptr<Model> model_for(const cli::BenchScene& b, bool near_cache, bool rescue_virtual = true) {
     RendererSettings settings;
     settings.haptic = b.scene.haptic;
     settings.near_cache = near_cache;
+    settings.rescue_virtual = rescue_virtual;
     ModelBuild mb = build_model(b.scene.tool.mesh, b.scene.objects, settings, b.scene.materials);
     EXPECT_TRUE(mb.model) << mb.error;
     return std::move(mb.model);
@@ -85,24 +86,30 @@ int contact_ticks(const std::vector<Tick>& t) {
     return n;
 }
 
-void expect_cache_changes_nothing(const std::string& name, size_t count) {
+// Later passes, whose near sets the cache narrows, take on the virtual contacts the rescue leaves
+// (all of them with `rescue_virtual` off); `narrowed`: some did.
+void expect_cache_changes_nothing(const std::string& name, size_t count, bool narrowed,
+                                  bool rescue_virtual = true) {
     const cli::BenchScene b = load(name);
     ASSERT_FALSE(b.ticks.empty()) << name;
-    const auto with = model_for(b, true), without = model_for(b, false);
+    const auto with = model_for(b, true, rescue_virtual), without = model_for(b, false, rescue_virtual);
     const std::vector<Tick> a = run(*with, b.ticks, count), c = run(*without, b.ticks, count);
     EXPECT_GT(contact_ticks(a), 100) << name;  // the probe is in contact for much of the run
     EXPECT_EQ(first_difference(a, c), -1) << name;
-    EXPECT_GT(narrower_ticks(a, c), 0) << name;  // later passes were narrowed
+    if (narrowed) {
+        EXPECT_GT(narrower_ticks(a, c), 0) << name;
+    }
 }
 
 }  // namespace
 
 TEST(NearCache, DenseWedgeProbingIsTheSameWithAndWithoutIt) {
-    expect_cache_changes_nothing("dense_wedge_250k", 100000);
+    expect_cache_changes_nothing("dense_wedge_250k", 100000, false);
+    expect_cache_changes_nothing("dense_wedge_250k", 100000, true, false);
 }
 
 TEST(NearCache, QuadrantTwoRegionSessionIsTheSameWithAndWithoutIt) {
-    expect_cache_changes_nothing("quadrant_two_regions", 100000);
+    expect_cache_changes_nothing("quadrant_two_regions", 100000, true);
 }
 
 TEST(NearCache, PaperScenesAreTheSameWithAndWithoutIt) {

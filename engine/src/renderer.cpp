@@ -2425,18 +2425,18 @@ bool apply_friction(const Model& model, const State& state, const Pose& base, co
 // A probe sliding over a dense mesh often ends a tick with a vertex slid past the edge of the
 // face whose plane holds it, or an object vertex slid off the tool face whose plane holds it: a
 // virtual contact, which another pass of the stages would take round the feature. Within the
-// pass, more cheaply: each such atom (a gathered V-F atom, feature plane or F-V atom of a rigid
+// pass, more cheaply: each such atom (a gathered V-F, F-V or E-E atom or feature plane of a rigid
 // object) is swapped for what gather would find at the solution -- the atoms of the features the
-// tool vertex faces among the pass's near triangles, or the tool face the object vertex is most in
-// front of -- and the set is solved again in the same box, with the same guard, up to
-// kRescueRounds times while the answer still has such contacts. Across a convex feature the free
-// space is the union of its faces' half-spaces, and the answer held on the slid-past plane meets
-// the swapped-in constraint there (to the tolerance), so each round's answer has no more energy
-// than the tolerance allows; it becomes the chosen one. A round whose answer has more (the
-// swapped-in plane holds the tool back, as a corner's plane from where the tool started) ends the
-// rescue, as does one still virtual without less energy. True when the answer's contacts are all
-// real; else the next pass takes on the
-// answer reached (E-E atoms, the guard's planes and compliant objects are left to it).
+// tool vertex faces among the pass's near triangles, the tool face the object vertex is most in
+// front of, and for edges whose lines meet beyond an end, that end's vertex -- and the set is
+// solved again in the same box, with the same guard, up to kRescueRounds times while the answer
+// still has such contacts. Across a convex feature the free space is the union of its faces'
+// half-spaces, and the answer held on the slid-past plane meets the swapped-in constraint there
+// (to the tolerance), so each round's answer has no more energy than the tolerance allows; it
+// becomes the chosen one. A round whose answer has more (the swapped-in plane holds the tool
+// back, as a corner's plane from where the tool started) ends the rescue, as does one still
+// virtual without less energy. True when the answer's contacts are all real; else the next pass
+// takes on the answer reached (the guard's planes and compliant objects are left to it).
 constexpr int kRescueRounds = 3;
 
 bool rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, const double target[6],
@@ -2465,7 +2465,7 @@ bool rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
                 w.cand[w.cand_count++] = a;
                 continue;
             }
-            const bool swappable = w.best_key[i] == 0 && a.kind != AtomKind::EdgeEdge && !model.objects[a.object].compliant;
+            const bool swappable = w.best_key[i] == 0 && !model.objects[a.object].compliant;
             if (!swappable || swap_count == kMaxSwapped) return false;
             swapped[swap_count++] = i;
         }
@@ -2477,35 +2477,13 @@ bool rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
             w.cand_key[w.cand_count] = 0;
             w.cand[w.cand_count++] = a;
         };
-        for (int s = 0; s < swap_count; ++s) {
-            const Atom& a = w.best[swapped[s]];
-            if (a.kind == AtomKind::FaceVertex) {
-                // The tool face of the same piece the object vertex is most in front of now.
-                size_t k = 0;
-                while (k + 1 < tool.pieces.size() && a.tool_face >= tool.pieces[k].face_begin + tool.pieces[k].face_count) ++k;
-                const ToolPiece& piece = tool.pieces[k];
-                const Vec3 v = glm::transpose(at.R) * (model.objects[a.object].mesh.vertices[a.object_vertex] - at.p);
-                uint32_t best = a.tool_face;
-                double best_s = -1e300;
-                for (uint32_t f = piece.face_begin; f < piece.face_begin + piece.face_count; ++f) {
-                    const double sf = glm::dot(tool.face_normals[f], v) - tool.face_offsets[f];
-                    if (sf > best_s) {
-                        best_s = sf;
-                        best = f;
-                    }
-                }
-                if (best == a.tool_face) return false;
-                Atom swap = a;
-                swap.tool_face = best;
-                for (int g = 0; g < gone_count; ++g)
-                    if (gone[g].same_as(swap)) append(a);
-                append(swap);
-                if (gone_count < kMaxGone) gone[gone_count++] = a;
-                continue;
-            }
-            // The features the tool vertex faces now, among the near triangles of its piece, as
-            // gather finds them (its atoms are added after w.atoms and taken from there).
-            const uint32_t tv = a.tool_vertex;
+        // What takes a swapped atom's place.
+        constexpr int kMaxReplacing = 16;
+        Atom replacing[kMaxReplacing];
+        int replacing_count = 0;
+        // The atoms of the features tool vertex tv faces now, among the near triangles of its
+        // piece, as gather finds them (added after w.atoms and taken from there).
+        auto vertex_atoms = [&](uint32_t tv) {
             const Vec3 wa = at.p + at.R * tool.mesh.vertices[tv];
             constexpr int kMaxKeys = 32;
             FeatureKey keys[kMaxKeys];
@@ -2528,15 +2506,72 @@ bool rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
             const int atom_count = w.atom_count, alt_count = w.alt_count;
             const bool gather_full = w.gather_full;
             for (int k = 0; k < key_count; ++k) add_feature_atoms(model, w, keys[k], wa, kBackFace);
-            bool back = false;
-            for (int k = atom_count; k < w.atom_count; ++k)
-                for (int g = 0; g < gone_count; ++g) back |= gone[g].same_as(w.atoms[k]);
-            if (back) append(a);
-            for (int k = atom_count; k < w.atom_count; ++k) append(w.atoms[k]);
-            if (gone_count < kMaxGone) gone[gone_count++] = a;
+            bool fits = true;
+            for (int k = atom_count; k < w.atom_count; ++k) {
+                if (replacing_count < kMaxReplacing) replacing[replacing_count++] = w.atoms[k];
+                else fits = false;
+            }
             w.atom_count = atom_count;
             w.alt_count = alt_count;
             w.gather_full = gather_full;
+            return fits;
+        };
+        // The F-V atom of object vertex ov against the face of piece k it is most in front of now.
+        auto face_atom = [&](uint16_t object, uint32_t ov, size_t k) {
+            const ToolPiece& piece = tool.pieces[k];
+            const Vec3 v = glm::transpose(at.R) * (model.objects[object].mesh.vertices[ov] - at.p);
+            Atom f;
+            f.kind = AtomKind::FaceVertex;
+            f.object = object;
+            f.object_vertex = ov;
+            double best_s = -1e300;
+            for (uint32_t face = piece.face_begin; face < piece.face_begin + piece.face_count; ++face) {
+                const double sf = glm::dot(tool.face_normals[face], v) - tool.face_offsets[face];
+                if (sf > best_s) {
+                    best_s = sf;
+                    f.tool_face = face;
+                }
+            }
+            return f;
+        };
+        for (int s = 0; s < swap_count; ++s) {
+            const Atom& a = w.best[swapped[s]];
+            replacing_count = 0;
+            if (a.kind == AtomKind::FaceVertex) {
+                // The tool face of the same piece the object vertex is most in front of now.
+                size_t k = 0;
+                while (k + 1 < tool.pieces.size() && a.tool_face >= tool.pieces[k].face_begin + tool.pieces[k].face_count) ++k;
+                const Atom f = face_atom(a.object, a.object_vertex, k);
+                if (f.tool_face == a.tool_face) return false;
+                replacing[replacing_count++] = f;
+            } else if (a.kind == AtomKind::EdgeEdge) {
+                // The edges' lines meet beyond an end: the end's vertex holds the tool there, as
+                // gather gives it (the tool's end by its features, the object's convex end by
+                // the tool face it is in front of).
+                const ModelObject& obj = model.objects[a.object];
+                const auto& te = tool.edges[a.tool_edge];
+                const MeshEdge& e = obj.topology.edges[a.object_edge];
+                const SegmentClosest sc =
+                    closest_segments(at.p + at.R * tool.mesh.vertices[te[0]], at.p + at.R * tool.mesh.vertices[te[1]],
+                                     obj.mesh.vertices[e.v[0]], obj.mesh.vertices[e.v[1]]);
+                const bool tool_end = sc.s <= 0.0 || sc.s >= 1.0, object_end = sc.t <= 0.0 || sc.t >= 1.0;
+                if (!tool_end && !object_end) return false;
+                if (tool_end && !vertex_atoms(te[sc.s <= 0.0 ? 0 : 1])) return false;
+                if (object_end) {
+                    const uint32_t ov = e.v[sc.t <= 0.0 ? 0 : 1];
+                    const Convexity cv = obj.topology.vertex_convexity[ov];
+                    if ((cv == Convexity::Convex || cv == Convexity::Mixed) && replacing_count < kMaxReplacing)
+                        replacing[replacing_count++] = face_atom(a.object, ov, tool.vertex_piece[te[0]]);
+                }
+            } else if (!vertex_atoms(a.tool_vertex)) {
+                return false;
+            }
+            bool back = false;
+            for (int k = 0; k < replacing_count; ++k)
+                for (int g = 0; g < gone_count; ++g) back |= gone[g].same_as(replacing[k]);
+            if (back) append(a);
+            for (int k = 0; k < replacing_count; ++k) append(replacing[k]);
+            if (gone_count < kMaxGone) gone[gone_count++] = a;
         }
         ++stats.candidates;
         const CandidateResult cr = solve_candidate(model, base, frame, target, target_local, lower, upper, reach,
