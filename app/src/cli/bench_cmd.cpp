@@ -31,7 +31,7 @@ const char* const kHelpBench =
     "  {\"machine\", \"scenes\": [{\"name\", \"triangles\", \"steps\", \"step_time_us\": {median, p99,\n"
     "   p999, max}, \"stages_us\": {stage: {median, p99}}, \"allocations_per_step\",\n"
     "   \"triangles_tested_per_step\", \"candidates_per_step\", ...}]}\n"
-    "Every 10th tick with a force is checked exactly for penetration and gap (not timed).\n"
+    "Every 10th tick with a force is checked exactly for penetration and gap, after the timed steps.\n"
     "\n"
     "  SCENE            run only these (names from --list)\n"
     "  --peer fcl       also time our proximity and collision queries against FCL's on the same\n"
