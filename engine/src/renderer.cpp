@@ -2341,6 +2341,19 @@ bool contact_is_real(const Model& model, const Atom& a, const ToolPoseAt& at, do
     return real;
 }
 
+// Whether the tool at `at` is within the contact distance of a rigid object's feature that a
+// gathered atom of the chosen set holds it off: in contact, as the step counts contacts, though
+// not touching to the tolerance, so not to be released. (A compliant triangle's separating plane
+// near the tool does not count: the tool can be near the plane far from its triangle.)
+bool within_contact_distance(const Model& model, const Workspace& w, const ToolPoseAt& at) {
+    const double within = model.settings.contact_distance_m;
+    for (int i = 0; i < w.best_count; ++i)
+        if (w.best_key[i] == 0 && !model.objects[w.best[i].object].compliant && best_value(model, w, i, at) <= within &&
+            feature_distance(model, w.best[i], at, within) <= within)
+            return true;
+    return false;
+}
+
 ContactCheck check_contacts(const Model& model, const Pose& base, const double x[6], const Workspace& w) {
     const double tol = model.settings.constraint_tol_m;
     const ToolPoseAt at = tool_pose_at(base, x);
@@ -2435,11 +2448,11 @@ bool apply_friction(const Model& model, const State& state, const Pose& base, co
 // (to the tolerance), so each round's answer has no more energy than the tolerance allows; it
 // becomes the chosen one. A round whose answer has more (the swapped-in plane holds the tool
 // back, as a corner's plane from where the tool started) ends the rescue, as does one still
-// virtual without less energy. True when the answer's contacts are all real; else the next pass
-// takes on the answer reached (the guard's planes and compliant objects are left to it).
+// virtual without less energy. Where contacts stay virtual, the next pass takes on the answer
+// reached (the guard's planes and compliant objects are left to it).
 constexpr int kRescueRounds = 3;
 
-bool rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, const double target[6],
+void rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, const double target[6],
                     const double target_local[6], const double lower[6], const double upper[6], double reach,
                     const State& state, Workspace& w, StepStats& stats, double x_sol[6]) {
     const double tol = model.settings.constraint_tol_m;
@@ -2466,10 +2479,10 @@ bool rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
                 continue;
             }
             const bool swappable = w.best_key[i] == 0 && !model.objects[a.object].compliant;
-            if (!swappable || swap_count == kMaxSwapped) return false;
+            if (!swappable || swap_count == kMaxSwapped) return;
             swapped[swap_count++] = i;
         }
-        if (swap_count == 0) return false;  // a round's answer with a virtual contact that cannot be swapped
+        if (swap_count == 0) return;  // a round's answer with a virtual contact that cannot be swapped
         auto append = [&](const Atom& a) {
             for (int j = 0; j < w.cand_count; ++j)
                 if (w.cand[j].same_as(a)) return;
@@ -2542,7 +2555,7 @@ bool rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
                 size_t k = 0;
                 while (k + 1 < tool.pieces.size() && a.tool_face >= tool.pieces[k].face_begin + tool.pieces[k].face_count) ++k;
                 const Atom f = face_atom(a.object, a.object_vertex, k);
-                if (f.tool_face == a.tool_face) return false;
+                if (f.tool_face == a.tool_face) return;
                 replacing[replacing_count++] = f;
             } else if (a.kind == AtomKind::EdgeEdge) {
                 // The edges' lines meet beyond an end: the end's vertex holds the tool there, as
@@ -2555,8 +2568,8 @@ bool rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
                     closest_segments(at.p + at.R * tool.mesh.vertices[te[0]], at.p + at.R * tool.mesh.vertices[te[1]],
                                      obj.mesh.vertices[e.v[0]], obj.mesh.vertices[e.v[1]]);
                 const bool tool_end = sc.s <= 0.0 || sc.s >= 1.0, object_end = sc.t <= 0.0 || sc.t >= 1.0;
-                if (!tool_end && !object_end) return false;
-                if (tool_end && !vertex_atoms(te[sc.s <= 0.0 ? 0 : 1])) return false;
+                if (!tool_end && !object_end) return;
+                if (tool_end && !vertex_atoms(te[sc.s <= 0.0 ? 0 : 1])) return;
                 if (object_end) {
                     const uint32_t ov = e.v[sc.t <= 0.0 ? 0 : 1];
                     const Convexity cv = obj.topology.vertex_convexity[ov];
@@ -2564,7 +2577,7 @@ bool rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
                         replacing[replacing_count++] = face_atom(a.object, ov, tool.vertex_piece[te[0]]);
                 }
             } else if (!vertex_atoms(a.tool_vertex)) {
-                return false;
+                return;
             }
             bool back = false;
             for (int k = 0; k < replacing_count; ++k)
@@ -2576,7 +2589,7 @@ bool rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
         ++stats.candidates;
         const CandidateResult cr = solve_candidate(model, base, frame, target, target_local, lower, upper, reach,
                                                    state.active, state.active_count, w, stats);
-        if (!cr.ok) return false;
+        if (!cr.ok) return;
         // Every contact real: taken with no more energy than the tolerance's give allows (the
         // swapped-in plane meets the slid-past answer to the tolerance, not exactly: the tool may
         // rise by a few tolerances). Still virtual: taken on for another round only with less.
@@ -2591,13 +2604,12 @@ bool rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
         const double lift = 4.0 * tol, w_t = model.settings.haptic.weight_translational;
         const double allowed = real ? w.best_energy + 2.0 * std::sqrt(2.0 * w.best_energy * w_t) * lift + w_t * lift * lift
                                     : w.best_energy;
-        if (!(cr.energy <= allowed)) return false;
+        if (!(cr.energy <= allowed)) return;
         keep_candidate(model, cr, w, stats, x_sol);
         stats.atoms = w.best_count;
         ++stats.rescues;
-        if (real) return true;
+        if (real) return;
     }
-    return false;
 }
 
 }  // namespace
@@ -2795,18 +2807,8 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             const ContactCheck cc = solved ? contacts() : ContactCheck{};
             bool at_target = solved;
             for (int j = 0; j < 6 && at_target; ++j) at_target = x_sol[j] == target[j];
-            // Within the contact distance of a rigid object's feature that a gathered atom holds
-            // it off, the tool is in contact (as the step counts contacts), though not touching
-            // to the tolerance: it is not released.
-            bool in_contact = false;
-            if (solved && !cc.real && !cc.virtual_only && !at_target) {
-                const ToolPoseAt at = tool_pose_at(base, x_sol);
-                for (int i = 0; i < w.best_count && !in_contact; ++i)
-                    in_contact = w.best_key[i] == 0 && !model.objects[w.best[i].object].compliant &&
-                                 best_value(model, w, i, at) <= S.contact_distance_m &&
-                                 feature_distance(model, w.best[i], at, S.contact_distance_m) <= S.contact_distance_m;
-            }
-            const bool released = solved && !cc.real && !cc.virtual_only && !at_target && !in_contact;
+            const bool released = solved && !cc.real && !cc.virtual_only && !at_target &&
+                                  !within_contact_distance(model, w, tool_pose_at(base, x_sol));
             if (released) {
                 res.stats.released = true;
                 double straight_lo[6], straight_hi[6];
