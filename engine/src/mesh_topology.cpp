@@ -30,10 +30,12 @@ MeshTopology build_topology(const TriMesh& mesh) {
     const size_t nv = mesh.vertices.size();
 
     topo.triangle_normals.resize(nt);
+    topo.triangle_spheres.resize(nt);
     for (size_t t = 0; t < nt; ++t) {
         const auto& tri = mesh.triangles[t];
-        const Vec3& a = mesh.vertices[tri[0]];
-        topo.triangle_normals[t] = glm::normalize(glm::cross(mesh.vertices[tri[1]] - a, mesh.vertices[tri[2]] - a));
+        const Vec3 &a = mesh.vertices[tri[0]], &b = mesh.vertices[tri[1]], &c = mesh.vertices[tri[2]];
+        topo.triangle_normals[t] = glm::normalize(glm::cross(b - a, c - a));
+        topo.triangle_spheres[t] = triangle_sphere(a, b, c);
     }
 
     const std::vector<EdgeUse> uses = sorted_edge_uses(mesh);

@@ -348,18 +348,6 @@ void set_tool_planes(const Model& model, const Quat& q, const Vec3& p, Workspace
 
 double box_reach(const RendererSettings& S, double tool_radius, const double lower[6], const double upper[6]);
 
-// A sphere round triangle (a, b, e): centred on its centroid, through its furthest vertex.
-struct TriangleSphere {
-    Vec3 centre;
-    double radius;
-};
-
-TriangleSphere triangle_sphere(const Vec3& a, const Vec3& b, const Vec3& e) {
-    const Vec3 centre = (a + b + e) / 3.0;
-    return {centre, std::sqrt(std::max({glm::dot(a - centre, a - centre), glm::dot(b - centre, b - centre),
-                                        glm::dot(e - centre, e - centre)}))};
-}
-
 // A lower bound on the distance between capsule k (axis p0-p1, radius r) and a triangle: the
 // triangle's bounding sphere `ts` against the capsule. Nearly exact for the small triangles of a
 // dense mesh.
@@ -394,18 +382,15 @@ CapsuleLine capsule_line(const ToolPiece& piece, const Vec3* axis) {
     return {axis, chain, length, length / piece.capsule_count};
 }
 
-double piece_capsule_bound(const ToolPiece& piece, const CapsuleLine& line, const Vec3& a, const Vec3& b,
-                           const Vec3& c, const Vec3& n, int& nearest) {
+// The least over the piece's capsules of capsule(j) for a triangle of bounding sphere ts, where
+// capsule(j) is at least the sphere's bound against capsule j: the capsule the centre projects
+// into first, then only those whose gap along the chain, less the radii, comes under what that
+// one gave (by a nanometre, for rounding). `nearest` receives the capsule that gave it.
+template <class Capsule>
+double least_over_capsules(const ToolPiece& piece, const CapsuleLine& line, const TriangleSphere& ts,
+                           Capsule&& capsule, int& nearest) {
     const Vec3* axis = line.axis;
-    const TriangleSphere ts = triangle_sphere(a, b, c);
     const int count = piece.capsule_count;
-    auto capsule = [&](int j) {
-        const double r = piece.capsule_radii_m[size_t(j)];
-        double bj = capsule_sphere_lower(axis[j], axis[j + 1], r, ts);
-        const double h0 = glm::dot(n, axis[j] - a), h1 = glm::dot(n, axis[j + 1] - a);
-        if (h0 * h1 > 0.0) bj = std::max(bj, std::min(std::abs(h0), std::abs(h1)) - r);
-        return bj;
-    };
     const double length = line.length, stretch = line.stretch;
     const double along = length > 0.0 ? glm::dot(ts.centre - axis[0], line.chain) / length : 0.0;
     auto gap_bound = [&](int j) {
@@ -425,6 +410,30 @@ double piece_capsule_bound(const ToolPiece& piece, const CapsuleLine& line, cons
         }
     }
     return bound;
+}
+
+double piece_capsule_bound(const ToolPiece& piece, const CapsuleLine& line, const Vec3& a, const TriangleSphere& ts,
+                           const Vec3& n, int& nearest) {
+    const Vec3* axis = line.axis;
+    auto capsule = [&](int j) {
+        const double r = piece.capsule_radii_m[size_t(j)];
+        double bj = capsule_sphere_lower(axis[j], axis[j + 1], r, ts);
+        const double h0 = glm::dot(n, axis[j] - a), h1 = glm::dot(n, axis[j + 1] - a);
+        if (h0 * h1 > 0.0) bj = std::max(bj, std::min(std::abs(h0), std::abs(h1)) - r);
+        return bj;
+    };
+    return least_over_capsules(piece, line, ts, capsule, nearest);
+}
+
+// The least over the piece's capsules of the sphere's bound (capsule_sphere_lower).
+double piece_sphere_bound(const ToolPiece& piece, const CapsuleLine& line, const TriangleSphere& ts) {
+    int nearest = 0;
+    return least_over_capsules(
+        piece, line, ts,
+        [&](int j) {
+            return capsule_sphere_lower(line.axis[j], line.axis[j + 1], piece.capsule_radii_m[size_t(j)], ts);
+        },
+        nearest);
 }
 
 // Whether a triangle of a rigid object is within `reach` of piece k (which has capsules), and
@@ -448,7 +457,8 @@ NearVerdict judge_near(const Model& model, size_t k, const ConvexView& view, con
     const auto& t = obj.mesh.triangles[tri];
     const Vec3 &a = obj.mesh.vertices[t[0]], &b = obj.mesh.vertices[t[1]], &c = obj.mesh.vertices[t[2]];
     int nearest = 0;
-    const double bound = piece_capsule_bound(piece, line, a, b, c, obj.topology.triangle_normals[tri], nearest);
+    const double bound = piece_capsule_bound(piece, line, a, obj.topology.triangle_spheres[tri],
+                                             obj.topology.triangle_normals[tri], nearest);
     if (bound > reach) return NearVerdict{false, bound, 1e300};
     if (capsules_only) return NearVerdict{true, bound, 1e300};
     // GJK starts along the line from the triangle to the nearest capsule's axis.
@@ -500,10 +510,10 @@ bool advance_superset(const Model& model, NearCache& c, long budget) {
         const uint16_t ok = static_cast<uint16_t>(b.object);
         bool overflow = false;
         const bool done = obj.bvh.walk_capsule_chain(b.walk, budget, [&](uint32_t tri) {
-            const auto& t = obj.mesh.triangles[tri];
             int nearest = 0;
-            const double bound = piece_capsule_bound(piece, line, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
-                                                     obj.mesh.vertices[t[2]], obj.topology.triangle_normals[tri], nearest);
+            const double bound = piece_capsule_bound(piece, line, obj.mesh.vertices[obj.mesh.triangles[tri][0]],
+                                                     obj.topology.triangle_spheres[tri],
+                                                     obj.topology.triangle_normals[tri], nearest);
             if (bound > b.radius_m) return true;
             if (b.count >= kNearCacheEntries) {
                 overflow = true;
@@ -727,16 +737,9 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                 Aabb b = box;
                 b.inflate(obj.compliant ? reach_all : reach);
                 obj.bvh.query(b, [&](uint32_t tri) {
-                    double bound = -1e300;
-                    if (piece.capsule_count > 0) {
-                        const auto& t = obj.mesh.triangles[tri];
-                        bound = 1e300;
-                        const TriangleSphere ts =
-                            triangle_sphere(obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]);
-                        for (int c = 0; c < piece.capsule_count; ++c)
-                            bound = std::min(bound,
-                                             capsule_sphere_lower(axis[c], axis[c + 1], piece.capsule_radii_m[size_t(c)], ts));
-                    }
+                    const double bound = piece.capsule_count > 0
+                                             ? piece_sphere_bound(piece, line, obj.topology.triangle_spheres[tri])
+                                             : -1e300;
                     return push(NearTri{ok, tri, pk, bound});
                 });
                 if (overflow) return false;
@@ -1157,7 +1160,7 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         }
         if (beyond) continue;
         // No point further than `far` from the triangle's bounding sphere is within `far` of it.
-        const TriangleSphere ts = triangle_sphere(p0, p1, p2);
+        const TriangleSphere& ts = obj.topology.triangle_spheres[nt.tri];
         const double sphere = ts.radius + far;
         const double along = glm::dot(axis_world[nt.piece], ts.centre - base.position);
         const double* coords = tool.axial_coords.data() + piece.vertex_begin;

@@ -5,7 +5,9 @@
 
 #include "sulcus/engine/types.h"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -33,12 +35,25 @@ struct MeshEdge {
     double dihedral = 0.0;         // signed bend angle in radians: > 0 convex, < 0 concave, 0 flat
 };
 
+// A sphere round a triangle: centred on its centroid, through its furthest vertex (m).
+struct TriangleSphere {
+    Vec3 centre;
+    double radius;
+};
+inline TriangleSphere triangle_sphere(const Vec3& a, const Vec3& b, const Vec3& e) {
+    const Vec3 centre = (a + b + e) / 3.0;
+    const double da = glm::dot(a - centre, a - centre), db = glm::dot(b - centre, b - centre),
+                 de = glm::dot(e - centre, e - centre);
+    return {centre, std::sqrt(std::max(std::max(da, db), de))};
+}
+
 // Adjacency derived from a validated TriMesh.
 struct MeshTopology {
     std::vector<MeshEdge> edges;
     std::vector<std::array<uint32_t, 3>> triangle_edges;   // edge index of (v0v1, v1v2, v2v0)
     std::vector<std::array<uint32_t, 3>> triangle_neighbours;  // triangle across each of those edges
     std::vector<Vec3> triangle_normals;                    // unit outward normals
+    std::vector<TriangleSphere> triangle_spheres;          // triangle_sphere of each triangle
     // Triangles and edges around each vertex (CSR layout: offsets has vertices+1 entries).
     std::vector<uint32_t> vertex_triangle_offsets, vertex_triangles;
     std::vector<uint32_t> vertex_edge_offsets, vertex_edges;
