@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -155,6 +156,55 @@ TEST(NearCache, InterleavedSessionsRepeatTheirLoneRuns) {
         with_copy.push_back(tick_of(step(*model, a, first[i])));
     }
     EXPECT_EQ(first_difference(with_copy, alone_first), -1);
+}
+
+// What the guard remembers of a tissue triangle's separation (SeparationMemo) comes back at a
+// later pose less the piece's motion bound since, for that triangle and piece only, and not once
+// the pose it held at has left the ring or the cache was reset.
+TEST(SeparationMemo, ComesBackLessTheMotionSinceWhileItsPoseIsKept) {
+    const cli::BenchScene b = load("paper/cavity_0mm");
+    ASSERT_FALSE(b.ticks.empty());
+    const auto model = model_for(b, true);
+    ASSERT_FALSE(model->tool.pieces.empty());
+    const ToolPiece& piece = model->tool.pieces[0];
+    auto c = std::make_unique<NearCache>();
+    const Pose a = b.ticks.front();
+    near_cache_begin(*c, *model, a);
+    ASSERT_TRUE(near_cache_at(*c, *model, a));
+    EXPECT_EQ(near_cache_separation(*c, *model, 0, 5, 0), -1e300);  // nothing kept yet
+    near_cache_keep_separation(*c, 0, 5, 0, 1e-4);
+    EXPECT_LE(near_cache_separation(*c, *model, 0, 5, 0), 1e-4);
+    EXPECT_GT(near_cache_separation(*c, *model, 0, 5, 0), 1e-4 - 1e-9);
+
+    Pose later = a;
+    later.position += Vec3(2e-5, -1e-5, 3e-5);
+    later.orientation = glm::normalize(quat_exp(Vec3(1e-3, 0.0, -2e-3)) * a.orientation);
+    near_cache_begin(*c, *model, later);
+    EXPECT_FALSE(near_cache_at(*c, *model, a));
+    ASSERT_TRUE(near_cache_at(*c, *model, later));
+    const double motion = motion_bound(piece, a, later);
+    ASSERT_GT(motion, 3e-5);
+    EXPECT_NEAR(near_cache_separation(*c, *model, 0, 5, 0), 1e-4 - motion, 1e-15);
+    // Another triangle, object or piece: nothing.
+    EXPECT_EQ(near_cache_separation(*c, *model, 0, 6, 0), -1e300);
+    EXPECT_EQ(near_cache_separation(*c, *model, 1, 5, 0), -1e300);
+    EXPECT_EQ(near_cache_separation(*c, *model, 0, 5, 1), -1e300);
+    // A triangle kept at the later pose comes back whole there.
+    near_cache_keep_separation(*c, 0, 6, 0, -2e-5);
+    EXPECT_GT(near_cache_separation(*c, *model, 0, 6, 0), -2e-5 - 1e-9);
+
+    // Once the first pose has left the ring, its memo bounds nothing.
+    Pose p = later;
+    for (int i = 0; i < kNearCacheSlots; ++i) {
+        p.position += Vec3(1e-7, 0.0, 0.0);
+        near_cache_begin(*c, *model, p);
+    }
+    EXPECT_EQ(near_cache_separation(*c, *model, 0, 5, 0), -1e300);
+    // A reset forgets the rest.
+    near_cache_keep_separation(*c, 0, 7, 0, 1e-4);
+    ASSERT_GT(near_cache_separation(*c, *model, 0, 7, 0), 0.0);
+    near_cache_reset(*c);
+    EXPECT_EQ(near_cache_separation(*c, *model, 0, 7, 0), -1e300);
 }
 
 // box_motion: no point within the radius of the tool's origin moves further from the earlier pose

@@ -31,6 +31,7 @@ namespace sulcus {
 inline constexpr int kNearCacheSlots = 64;       // recent tool poses entries may refer to
 inline constexpr int kNearCacheEntries = 4096;   // superset triangles per piece at most
 inline constexpr int kNearCacheHash = 8192;      // carry-over table (a power of two, >= 2 entries)
+inline constexpr int kSeparationMemo = 4096;     // remembered separations (a power of two)
 
 struct NearCacheEntry {
     uint32_t tri = 0;
@@ -46,6 +47,19 @@ struct NearCacheEntry {
     // the direction and the turn times the piece's radius (direction_lower_bound): while the tool
     // slides along a surface, far less than its whole motion.
     double direction_gap = -1e300;
+};
+
+// A lower bound on the separation of a piece and a triangle of a compliant object at the pose of
+// `stamp`, as the guard found it there (solve_candidate): no point moving by d changes the
+// separation by more than d, so less the piece's motion since, it bounds the separation at a later
+// pose too. The tool rests inside the gingiva for hundreds of ticks at a time, over the same
+// triangles: most of them stay clear of the guard's floor by far more than a tick's motion.
+struct SeparationMemo {
+    uint64_t stamp = 0;  // 0: none
+    uint32_t tri = 0;
+    uint16_t object = 0;
+    uint8_t piece = 0;
+    double separation_m = 0.0;
 };
 
 struct PieceNearCache {
@@ -121,6 +135,8 @@ struct NearCache {
     uint64_t turn_for[kNearCacheSlots] = {};
     PieceNearCache piece[kMaxToolPieces];
     int32_t table[kNearCacheHash];  // (object, triangle) -> index in the superset being replaced
+    // By (object, triangle, piece), one per slot: a later triangle takes a taken slot over.
+    SeparationMemo separations[kSeparationMemo];
     SupersetBuild build;            // at most one in progress
     // The entries and dues of the pieces and the build: an install trades the build's for the
     // piece's instead of copying them.
@@ -373,6 +389,40 @@ inline uint32_t near_cache_hash(uint16_t object, uint32_t tri) {
     uint64_t k = (uint64_t(object) << 32) | tri;
     k *= 0x9E3779B97F4A7C15ull;
     return uint32_t(k >> 40) & (kNearCacheHash - 1);
+}
+
+inline SeparationMemo& near_cache_separation_slot(NearCache& c, uint16_t object, uint32_t tri, uint8_t piece) {
+    return c.separations[(near_cache_hash(object, tri) + 977u * piece) & (kSeparationMemo - 1)];
+}
+
+// Whether the cache's current pose is `pose` (of the model it was filled for): then what it
+// remembers of separations holds, less the motion since, there.
+inline bool near_cache_at(const NearCache& c, const Model& model, const Pose& pose) {
+    const int slot = int(c.stamp % kNearCacheSlots);
+    return c.model_serial == model.serial && c.stamp > 0 && c.ring_stamp[slot] == c.stamp &&
+           same_pose(c.ring[slot], pose);
+}
+
+// A lower bound on the separation of piece k and (object, tri) at the current pose from what the
+// memo holds for them (SeparationMemo); -1e300 when it holds nothing of them, or nothing the ring
+// still has the pose of.
+inline double near_cache_separation(NearCache& c, const Model& model, uint16_t object, uint32_t tri, uint8_t k) {
+    const SeparationMemo& s = near_cache_separation_slot(c, object, tri, k);
+    double motion = 0.0;
+    if (s.tri != tri || s.object != object || s.piece != k || !near_cache_motion(c, model, s.stamp, k, motion))
+        return -1e300;
+    return s.separation_m - motion;
+}
+
+// Remembers a lower bound on the separation of piece k and (object, tri) at the current pose.
+inline void near_cache_keep_separation(NearCache& c, uint16_t object, uint32_t tri, uint8_t k, double separation) {
+    if (!(separation > -1e300)) return;
+    SeparationMemo& s = near_cache_separation_slot(c, object, tri, k);
+    s.stamp = c.stamp;
+    s.tri = tri;
+    s.object = object;
+    s.piece = k;
+    s.separation_m = separation;
 }
 
 // The slots of the carry-over table for a superset of `count` entries: a power of two at least

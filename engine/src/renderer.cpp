@@ -1927,18 +1927,30 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         // pose. A compliant triangle (which the tool is often inside) tries the witnesses
         // (separation_witness) before GJK; a rigid one only where GJK finds them touching. Either
         // way a bound that falls short is kept: the check at the new pose settles the triangle.
+        // A compliant triangle's separation at an earlier pose, less the motion since
+        // (SeparationMemo), comes first; what is found here is remembered.
+        const bool memo = S.near_cache && near_cache_at(w.cache, model, base);
         for (int i = 0; i < w.near_count; ++i) {
             NearTri& nt = w.near[i];
             const double moved_by = shift + turn * model.tool.pieces[nt.piece].radius_m;
             if (nt.lower_m > moved_by || !std::isnan(nt.separation_m)) continue;
             const double give = triangle_zone_depth(model, w.slacks, nt);
             if (bound_settles(nt, moved_by, give)) continue;
-            const ConvexView view = tool_view(model, nt.piece, w.tool_world, w);
             const double floor = moved_by - (S.constraint_tol_m + give);
             const bool compliant = model.objects[nt.object].compliant;
+            const bool remember = compliant && memo;
+            if (remember) {
+                const double earlier = near_cache_separation(w.cache, model, nt.object, nt.tri, nt.piece);
+                if (earlier >= floor) {
+                    nt.separation_m = std::max(earlier, nt.lower_m);
+                    continue;
+                }
+            }
+            const ConvexView view = tool_view(model, nt.piece, w.tool_world, w);
             const double witness = compliant ? separation_witness(model, view, nt, floor, w) : -1e300;
             if (witness >= floor) {
                 nt.separation_m = std::max(witness, nt.lower_m);
+                if (remember) near_cache_keep_separation(w.cache, nt.object, nt.tri, nt.piece, nt.separation_m);
                 continue;
             }
             // Detect's upper bound on the distance here under the floor (a triangle the tool
@@ -1959,6 +1971,7 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             if (d.separation < floor && !(d.upper < floor))
                 nt.separation_m =
                     std::max(d.separation, compliant ? witness : separation_witness(model, view, nt, floor, w));
+            if (remember) near_cache_keep_separation(w.cache, nt.object, nt.tri, nt.piece, nt.separation_m);
         }
         // The tool at the new pose, placed once a triangle needs it.
         bool moved_placed = false;
