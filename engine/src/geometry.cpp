@@ -1,5 +1,7 @@
 #include "geometry.h"
 
+#include "sulcus/engine/mesh.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -228,10 +230,34 @@ double segment_triangle_distance(const Vec3& p0, const Vec3& p1, const Vec3& a, 
 
 double capsule_lower_bound(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c) {
     if (!poly.capsule || poly.capsule_count <= 0) return -1e300;
-    double lower = 1e300;
-    for (int k = 0; k < poly.capsule_count; ++k)
-        lower = std::min(lower, segment_triangle_distance(poly.capsule[k], poly.capsule[k + 1], a, b, c) -
-                                    poly.capsule_radii[k]);
+    constexpr int kMaxCapsules = 16;
+    const int count = poly.capsule_count;
+    auto exact = [&](int k) {
+        return segment_triangle_distance(poly.capsule[k], poly.capsule[k + 1], a, b, c) - poly.capsule_radii[k];
+    };
+    if (count > kMaxCapsules) {
+        double lower = 1e300;
+        for (int k = 0; k < count; ++k) lower = std::min(lower, exact(k));
+        return lower;
+    }
+    // Every point of the triangle lies within the sphere round it (TriangleSphere), so a capsule
+    // is no nearer to the triangle than to that sphere: the nearest capsule by the sphere first,
+    // then only those the sphere puts under the least so far (with room for rounding, far above
+    // it) are measured. The least is the same as measuring all.
+    const TriangleSphere ts = triangle_sphere(a, b, c);
+    double sphere[kMaxCapsules];
+    int first = 0;
+    for (int k = 0; k < count; ++k) {
+        const Vec3 d = poly.capsule[k + 1] - poly.capsule[k], off = ts.centre - poly.capsule[k];
+        const double dd = glm::dot(d, d);
+        const double t = dd > 0.0 ? std::clamp(glm::dot(off, d) / dd, 0.0, 1.0) : 0.0;
+        sphere[k] = glm::length(off - t * d) - ts.radius - poly.capsule_radii[k];
+        if (sphere[k] < sphere[first]) first = k;
+    }
+    const double room = 1e-9 + 1e-12 * (glm::length(ts.centre) + ts.radius);
+    double lower = exact(first);
+    for (int k = 0; k < count; ++k)
+        if (k != first && sphere[k] - room < lower) lower = std::min(lower, exact(k));
     return lower;
 }
 
