@@ -263,12 +263,10 @@ TEST(CapsuleBound, IsTheLeastOverEveryCapsule) {
                               view.capsule_radii[k];
             every = std::min(every, dk);
         }
-        for (int k = 0; k < view.capsule_count; ++k) {
-            const TriangleSphere ts = triangle_sphere(a, b, d);
-            const Vec3 e = view.capsule[k + 1] - view.capsule[k], off = ts.centre - view.capsule[k];
-            const double along = std::clamp(glm::dot(off, e) / glm::dot(e, e), 0.0, 1.0);
-            under += glm::length(off - along * e) - ts.radius - view.capsule_radii[k] < every + 1e-9;
-        }
+        const TriangleSphere ts = triangle_sphere(a, b, d);
+        for (int k = 0; k < view.capsule_count; ++k)
+            under += capsule_sphere_lower(view.capsule[k], view.capsule[k + 1], view.capsule_radii[k], ts) <
+                     every + 1e-9;
         const double bound = capsule_lower_bound(view, a, b, d);
         ASSERT_EQ(std::memcmp(&bound, &every, sizeof(double)), 0) << "trial " << t << ": " << bound << " " << every;
         spared += under < view.capsule_count;

@@ -1,7 +1,5 @@
 #include "geometry.h"
 
-#include "sulcus/engine/mesh.h"
-
 #include <algorithm>
 #include <cmath>
 
@@ -248,10 +246,7 @@ double capsule_lower_bound(const ConvexView& poly, const Vec3& a, const Vec3& b,
     double sphere[kMaxCapsules];
     int first = 0;
     for (int k = 0; k < count; ++k) {
-        const Vec3 d = poly.capsule[k + 1] - poly.capsule[k], off = ts.centre - poly.capsule[k];
-        const double dd = glm::dot(d, d);
-        const double t = dd > 0.0 ? std::clamp(glm::dot(off, d) / dd, 0.0, 1.0) : 0.0;
-        sphere[k] = glm::length(off - t * d) - ts.radius - poly.capsule_radii[k];
+        sphere[k] = capsule_sphere_lower(poly.capsule[k], poly.capsule[k + 1], poly.capsule_radii[k], ts);
         if (sphere[k] < sphere[first]) first = k;
     }
     const double room = 1e-9 + 1e-12 * (glm::length(ts.centre) + ts.radius);

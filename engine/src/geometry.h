@@ -3,7 +3,9 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 
+#include "sulcus/engine/mesh.h"
 #include "sulcus/engine/types.h"
 
 namespace sulcus {
@@ -134,6 +136,16 @@ inline int least_along(const Vec3* vertices, int count, const uint32_t* neighbou
 
 // Distance between segment p0-p1 and triangle (a, b, c); 0 when the segment crosses it.
 double segment_triangle_distance(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& b, const Vec3& c);
+
+// A lower bound on the distance between capsule k (axis p0-p1, radius r) and a triangle: the
+// triangle's bounding sphere `ts` against the capsule. Nearly exact for the small triangles of a
+// dense mesh.
+inline double capsule_sphere_lower(const Vec3& p0, const Vec3& p1, double r, const TriangleSphere& ts) {
+    const Vec3 d = p1 - p0, off = ts.centre - p0;
+    const double dd = glm::dot(d, d);
+    const double s = dd > 0.0 ? std::clamp(glm::dot(off, d) / dd, 0.0, 1.0) : 0.0;
+    return glm::length(off - s * d) - ts.radius - r;
+}
 
 // A lower bound on the distance between the polytope and the triangle from its bounding capsules
 // (-infinity without them); <= 0 says nothing.

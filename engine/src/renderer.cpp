@@ -348,16 +348,6 @@ void set_tool_planes(const Model& model, const Quat& q, const Vec3& p, Workspace
 
 double box_reach(const RendererSettings& S, double tool_radius, const double lower[6], const double upper[6]);
 
-// A lower bound on the distance between capsule k (axis p0-p1, radius r) and a triangle: the
-// triangle's bounding sphere `ts` against the capsule. Nearly exact for the small triangles of a
-// dense mesh.
-double capsule_sphere_lower(const Vec3& p0, const Vec3& p1, double r, const TriangleSphere& ts) {
-    const Vec3 d = p1 - p0, off = ts.centre - p0;
-    const double dd = glm::dot(d, d);
-    const double s = dd > 0.0 ? std::clamp(glm::dot(off, d) / dd, 0.0, 1.0) : 0.0;
-    return glm::length(off - s * d) - ts.radius - r;
-}
-
 // A lower bound on the distance between a piece with capsules and triangle (a, b, c) of normal n:
 // the least over its capsules of the bounding-sphere bound, raised where a capsule's axis lies
 // wholly on one side of the triangle's plane to its nearer end's height. `nearest` receives the
