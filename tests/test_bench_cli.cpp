@@ -151,6 +151,52 @@ TEST_F(Bench, TicksCsvHasOneRowPerStepAndNoChecksWhenAskedNone) {
     EXPECT_EQ(contact, s.value("contact_steps", -1L));
 }
 
+TEST_F(Bench, RunsGiveTheLeastTimePerTickAndTheMachineInterruptions) {
+    const fs::path ticks = dir / "ticks", file = dir / "bench.json";
+    const Outcome o = run_cli("bench paper/sharp_corner --runs 3 --check-every 0 --ticks " + ticks.string() + " --json " +
+                                  file.string(),
+                              dir);
+    ASSERT_EQ(o.status, 0) << o.err;
+    const json j = json::parse(read_text(file));
+    // The machine's own interruptions, measured by a spin before the scenes.
+    ASSERT_TRUE(j["machine"].contains("interruptions"));
+    const json& in = j["machine"]["interruptions"];
+    EXPECT_GE(in.value("probe_s", 0.0), 0.5);
+    EXPECT_GE(in.value("per_second", -1.0), 0.0);
+    EXPECT_GE(in.value("lost_fraction", -1.0), 0.0);
+    EXPECT_LE(in.value("lost_fraction", 2.0), 1.0);
+    ASSERT_TRUE(in.contains("length_us"));
+    if (in.value("per_second", 0.0) > 0.0) {  // a quiet machine may have none
+        expect_percentiles(in["length_us"], "length_us");
+        EXPECT_GE(in["length_us"].value("median", 0.0), 5.0);
+    }
+    // Per tick the least of three runs: no more than the first run's time at any tick, and so
+    // at every percentile.
+    const json& s = j["scenes"][0];
+    ASSERT_TRUE(s.contains("least_of_runs"));
+    EXPECT_EQ(s["least_of_runs"].value("runs", 0), 3);
+    const json& least = s["least_of_runs"]["step_time_us"];
+    expect_percentiles(least, "least_of_runs");
+    for (const char* p : {"median", "p99", "p999", "max"})
+        EXPECT_LE(least.value(p, 1e9), s["step_time_us"].value(p, -1.0)) << p;
+    const std::vector<std::string> lines = split(read_text(ticks / "paper_sharp_corner_ticks.csv"), '\n');
+    ASSERT_EQ(long(lines.size()), s.value("steps", 0L) + 1);
+    const std::vector<std::string> header = split(lines[0], ',');
+    const auto col = [&](const char* name) { return size_t(std::find(header.begin(), header.end(), name) - header.begin()); };
+    const size_t first = col("step_us"), least_col = col("least_step_us");
+    ASSERT_LT(least_col, header.size());
+    for (size_t i = 1; i < lines.size(); ++i) {
+        const std::vector<std::string> row = split(lines[i], ',');
+        ASSERT_EQ(row.size(), header.size()) << lines[i];
+        EXPECT_GT(std::stod(row[least_col]), 0.0) << lines[i];
+        EXPECT_LE(std::stod(row[least_col]), std::stod(row[first])) << lines[i];
+    }
+    // One run, as before: no least_of_runs.
+    const Outcome one = run_cli("bench paper/sharp_corner --check-every 0 --json " + file.string(), dir);
+    ASSERT_EQ(one.status, 0) << one.err;
+    EXPECT_FALSE(json::parse(read_text(file))["scenes"][0].contains("least_of_runs"));
+}
+
 TEST_F(Bench, ListNamesTheFixedScenes) {
     const Outcome o = run_cli("bench --list", dir);
     ASSERT_EQ(o.status, 0) << o.err;
@@ -168,6 +214,7 @@ TEST_F(Bench, BadArgumentsExitTwoWithOneLine) {
     expect_bad("bench paper/cavity_0mm --frobnicate", "--frobnicate");
     expect_bad("bench paper/cavity_0mm --peer nope", "nope");
     expect_bad("bench paper/cavity_0mm --check-every x", "--check-every");
+    expect_bad("bench paper/cavity_0mm --runs 0", "--runs");
     // A directory that cannot be made (under a file) is refused before any scene runs.
     const fs::path file = dir / "a_file";
     std::ofstream(file) << "x";

@@ -22,7 +22,8 @@ namespace sulcus::cli {
 
 const char* const kHelpBench =
     "usage: sulcus-cli bench [SCENE...] [--json FILE] [--peer fcl] [--max-ticks N] [--list]\n"
-    "                        [--ticks DIR] [--check-every N] [--content-root DIR] [--cases DIR]\n"
+    "                        [--ticks DIR] [--check-every N] [--runs N] [--content-root DIR]\n"
+    "                        [--cases DIR]\n"
     "\n"
     "Times the servo step over a fixed, deterministic set of scenes (the paper scenes, the\n"
     "bundled quadrant case probed at every site at full resolution, and a scripted session on it\n"
@@ -32,12 +33,17 @@ const char* const kHelpBench =
     "   p999, max}, \"stages_us\": {stage: {median, p99}}, \"allocations_per_step\",\n"
     "   \"triangles_tested_per_step\", \"candidates_per_step\", ...}]}\n"
     "Every 10th tick with a force is checked exactly for penetration and gap, after the timed steps.\n"
+    "First, a half-second spin on the clock measures what the machine takes from a running\n"
+    "thread (\"machine\": {\"interruptions\"}): a step timed across such a gap is that much longer.\n"
     "\n"
     "  SCENE            run only these (names from --list)\n"
     "  --peer fcl       also time our proximity and collision queries against FCL's on the same\n"
     "                   meshes and poses (graphic poses of the run), as a time ratio\n"
     "  --max-ticks N    only the first N ticks of each scene (for profiling)\n"
     "  --check-every N  the exact checks on every N-th tick with a force instead (0: none)\n"
+    "  --runs N         run each scene N times from a fresh state: every run must give the same\n"
+    "                   answers to the bit; \"least_of_runs\" has the step time per tick the least\n"
+    "                   over the runs (what the step costs, less the machine's interruptions)\n"
     "  --ticks DIR      also write each scene's ticks, one row per step with its status, stage\n"
     "                   times, counters, graphic pose and force, to DIR/<scene>_ticks.csv ('/' in a\n"
     "                   name as '_'): to find the slow ticks, and to compare two builds' answers\n"
@@ -106,7 +112,7 @@ bool write_ticks_csv(const std::string& path, const BenchRun& run) {
     std::fprintf(f, "tick,status,step_us,detect_us,gather_us,solve_us,select_us,force_us,triangles_near,"
                     "triangles_tested,atoms_gathered,candidates,atoms,qp_solves,qp_iterations,relinearizations,"
                     "passes,rescues,released,gather_truncated,regions,soft_depth_m,allocations,px_m,py_m,pz_m,qw,qx,qy,qz,"
-                    "fx_N,fy_N,fz_N\n");
+                    "fx_N,fy_N,fz_N,least_step_us\n");
     for (size_t i = 0; i < run.ticks.size(); ++i) {
         const BenchTick& t = run.ticks[i];
         const StepStats& s = t.stats;
@@ -115,12 +121,12 @@ bool write_ticks_csv(const std::string& path, const BenchRun& run) {
         const Quat& q = t.graphic.orientation;
         std::fprintf(f,
                      "%zu,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%.9g,%ld,"
-                     "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n",
+                     "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.3f\n",
                      i, to_string(t.status), t.step_us, s.times.detect_us, s.times.gather_us, s.times.solve_us,
                      s.times.select_us, s.times.force_us, s.triangles_near, s.triangles_tested, s.atoms_gathered,
                      s.candidates, s.atoms, s.qp_solves, s.qp_iterations, s.relinearizations, s.passes, s.rescues,
                      int(s.released), int(s.gather_truncated), s.regions, s.soft_depth_m, t.allocations, p.x, p.y, p.z,
-                     q.w, q.x, q.y, q.z, t.force_N.x, t.force_N.y, t.force_N.z);
+                     q.w, q.x, q.y, q.z, t.force_N.x, t.force_N.y, t.force_N.z, t.least_step_us);
     }
     return std::fclose(f) == 0;
 }
@@ -130,12 +136,12 @@ bool write_ticks_csv(const std::string& path, const BenchRun& run) {
 int cmd_bench(const std::vector<std::string>& args) {
     std::string json_path, peer, content_root, cases_dir, ticks_dir;
     std::vector<std::string> names;
-    long max_ticks = 0, check_every = 10;
+    long max_ticks = 0, check_every = 10, runs = 1;
     bool list = false;
     for (size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
         if (a == "--json" || a == "--peer" || a == "--max-ticks" || a == "--content-root" || a == "--cases" ||
-            a == "--ticks" || a == "--check-every") {
+            a == "--ticks" || a == "--check-every" || a == "--runs") {
             if (i + 1 >= args.size()) return usage("bench: " + a + " needs a value");
             const std::string& v = args[++i];
             if (a == "--json") json_path = v;
@@ -143,7 +149,10 @@ int cmd_bench(const std::vector<std::string>& args) {
             else if (a == "--content-root") content_root = v;
             else if (a == "--cases") cases_dir = v;
             else if (a == "--ticks") ticks_dir = v;
-            else if (a == "--check-every") {
+            else if (a == "--runs") {
+                if (!parse_whole(v, 1, 1000, &runs))
+                    return usage("bench: --runs needs a whole number from 1 to 1000, not '" + v + "'");
+            } else if (a == "--check-every") {
                 if (!parse_whole(v, 0, INT_MAX, &check_every))
                     return usage("bench: --check-every needs a whole number, not '" + v + "'");
             } else if (!parse_whole(v, 1, LONG_MAX, &max_ticks))
@@ -167,6 +176,12 @@ int cmd_bench(const std::vector<std::string>& args) {
         for (const std::string& n : bench_scene_names()) std::printf("%s\n", n.c_str());
         return kOk;
     }
+    // One scene at a time: the quadrant's meshes are large.
+    const std::vector<std::string> all = bench_scene_names();
+    const std::vector<std::string> order = names.empty() ? all : names;
+    for (const std::string& n : order)
+        if (std::find(all.begin(), all.end(), n) == all.end())
+            return usage("bench: unknown scene '" + n + "' (the scenes: 'sulcus-cli bench --list')");
     if (!ticks_dir.empty()) {
         // Made before any scene runs, so that a bad directory costs no run.
         std::error_code ec;
@@ -179,16 +194,21 @@ int cmd_bench(const std::vector<std::string>& args) {
     }
     nlohmann::json out;
     out["machine"] = machine_json();
+    {
+        const Interruptions in = probe_interruptions(0.5);
+        out["machine"]["interruptions"] = {{"probe_s", in.seconds},
+                                           {"threshold_us", 5.0},
+                                           {"per_second", in.per_second},
+                                           {"lost_fraction", in.lost_fraction},
+                                           {"length_us", pct_json(in.length_us, true)}};
+        std::printf("machine: %.0f interruptions per second of 5 us or more, %.1f %% of the time; length median "
+                    "%.1f us, p99 %.1f us, max %.1f us\n",
+                    in.per_second, 100.0 * in.lost_fraction, in.length_us.median, in.length_us.p99, in.length_us.max);
+    }
     out["scenes"] = nlohmann::json::array();
     nlohmann::json peers = nlohmann::json::array();
     std::printf("%-28s %9s %7s %7s %9s %9s %9s %9s %7s %8s %6s %10s\n", "scene", "triangles", "steps", "contact",
                 "median_us", "p99_us", "p999_us", "max_us", "allocs", "tests", "cands", "max_pen_m");
-    // One scene at a time: the quadrant's meshes are large.
-    const std::vector<std::string> all = bench_scene_names();
-    const std::vector<std::string> order = names.empty() ? all : names;
-    for (const std::string& n : order)
-        if (std::find(all.begin(), all.end(), n) == all.end())
-            return usage("bench: unknown scene '" + n + "' (the scenes: 'sulcus-cli bench --list')");
     for (const std::string& name : order) {
         BenchScenes loaded = load_bench_scenes({name}, content_root, cases_dir);
         if (!loaded.error.empty()) {
@@ -199,16 +219,18 @@ int cmd_bench(const std::vector<std::string>& args) {
         BenchRunOptions opt;
         opt.max_ticks = max_ticks;
         opt.check_every = int(check_every);
+        opt.runs = int(runs);
         const BenchRun run = run_bench(b, RendererSettings{}, opt);
         if (!run.error.empty()) {
             std::fprintf(stderr, "%s\n", run.error.c_str());
             return kUsage;
         }
-        std::vector<double> times, stage[kStageCount];
+        std::vector<double> times, least, stage[kStageCount];
         long allocations = 0, contact = 0, two_regions = 0;
         double tests = 0, cands = 0;
         for (const BenchTick& t : run.ticks) {
             times.push_back(t.step_us);
+            least.push_back(t.least_step_us);
             for (int k = 0; k < kStageCount; ++k) stage[k].push_back(stage_us(t.stats.times, k));
             allocations += t.allocations;
             contact += t.contact;
@@ -237,6 +259,12 @@ int cmd_bench(const std::vector<std::string>& args) {
         std::printf("%-28s %9zu %7zu %7ld %9.1f %9.1f %9.1f %9.1f %7.3f %8.1f %6.2f %10.2e\n", b.name.c_str(), b.triangles,
                     run.ticks.size(), contact, st.median, st.p99, st.p999, st.max, double(allocations) / steps,
                     tests / steps, cands / steps, run.max_penetration_m);
+        if (runs > 1) {
+            const Percentiles lt = percentiles(least);
+            out["scenes"].back()["least_of_runs"] = {{"runs", runs}, {"step_time_us", pct_json(lt, true)}};
+            std::printf("%-28s %9s %7s %7s %9.1f %9.1f %9.1f %9.1f   per tick the least of %ld runs, the same answers\n",
+                        "", "", "", "", lt.median, lt.p99, lt.p999, lt.max, runs);
+        }
         std::fflush(stdout);
         if (!ticks_dir.empty()) {
             const std::string path = (std::filesystem::path(ticks_dir) / (scene_file_name(b.name) + "_ticks.csv")).string();

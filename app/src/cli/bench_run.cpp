@@ -6,8 +6,19 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 
 namespace sulcus::cli {
+
+namespace {
+
+bool same_bits(const Vec3& a, const Vec3& b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+bool same_bits(const Pose& a, const Pose& b) {
+    return same_bits(a.position, b.position) && std::memcmp(&a.orientation, &b.orientation, sizeof a.orientation) == 0;
+}
+
+}  // namespace
 
 BenchRun run_bench(const BenchScene& b, RendererSettings settings, const BenchRunOptions& options) {
     BenchRun run;
@@ -25,6 +36,7 @@ BenchRun run_bench(const BenchScene& b, RendererSettings settings, const BenchRu
         (model.objects[i].compliant ? compliant : rigid).push_back(PlacedMesh{&b.scene.objects[i].mesh, b.scene.objects[i].pose});
     const std::vector<TriMesh> pieces = connected_components(b.scene.tool.mesh);
 
+    const int runs = std::max(1, options.runs);
     const size_t n = options.max_ticks > 0 ? std::min(b.ticks.size(), size_t(options.max_ticks)) : b.ticks.size();
     run.ticks.resize(n);
     State state = make_state(b.ticks.front());
@@ -46,6 +58,7 @@ BenchRun run_bench(const BenchScene& b, RendererSettings settings, const BenchRu
         BenchTick& t = run.ticks[i];
         t.allocations = thread_heap_allocations() - allocs;
         t.step_us = std::chrono::duration<double, std::micro>(t1 - t0).count();
+        t.least_step_us = t.step_us;
         t.stats = r.stats;
         t.status = r.status;
         t.graphic = r.graphic;
@@ -54,6 +67,31 @@ BenchRun run_bench(const BenchScene& b, RendererSettings settings, const BenchRu
         t.contact = r.contacts > 0;
         const bool has_force = glm::length(r.force_N) > 0.0 || glm::length(r.torque_Nm) > 0.0;
         if (options.check_every > 0 && has_force && contact_ticks++ % options.check_every == 0) to_check.push_back(i);
+    }
+    // Further runs from a fresh state (a new session: the step's caches start over). The same
+    // input must give the same answer to the bit; the least time per tick leaves out what the
+    // machine took from the thread in one run but not in another.
+    for (int k = 1; k < runs; ++k) {
+        state = make_state(b.ticks.front());
+        {
+            State scratch = state;
+            step(model, scratch, b.ticks.front());
+        }
+        for (size_t i = 0; i < n; ++i) {
+            const long allocs = thread_heap_allocations();
+            const auto t0 = std::chrono::steady_clock::now();
+            const StepResult r = step(model, state, b.ticks[i]);
+            const auto t1 = std::chrono::steady_clock::now();
+            BenchTick& t = run.ticks[i];
+            t.allocations = std::max(t.allocations, thread_heap_allocations() - allocs);
+            t.least_step_us = std::min(t.least_step_us, std::chrono::duration<double, std::micro>(t1 - t0).count());
+            if (r.status != t.status || !same_bits(r.graphic, t.graphic) || !same_bits(r.force_N, t.force_N) ||
+                !same_bits(r.torque_Nm, t.torque_Nm)) {
+                run.error = b.scene.path + ": run " + std::to_string(k + 1) + ", tick " + std::to_string(i) +
+                            ": the answer differs from run 1's (the step is not deterministic)";
+                return run;
+            }
+        }
     }
     for (const size_t i : to_check) {
         constexpr double kGapLimit = 1e-3;
@@ -66,6 +104,32 @@ BenchRun run_bench(const BenchScene& b, RendererSettings settings, const BenchRu
         ++run.checked_ticks;
     }
     return run;
+}
+
+Interruptions probe_interruptions(double seconds, double threshold_us) {
+    using Clock = std::chrono::steady_clock;
+    Interruptions out;
+    if (!(seconds > 0.0)) return out;
+    std::vector<double> lengths;
+    lengths.reserve(size_t(seconds * 20000.0) + 16);
+    const Clock::time_point start = Clock::now();
+    Clock::time_point prev = start;
+    const auto span = std::chrono::duration<double>(seconds);
+    for (;;) {
+        const Clock::time_point t = Clock::now();
+        const double gap_us = std::chrono::duration<double, std::micro>(t - prev).count();
+        if (gap_us >= threshold_us && lengths.size() < lengths.capacity()) lengths.push_back(gap_us);
+        prev = t;
+        if (t - start >= span) break;
+    }
+    out.seconds = std::chrono::duration<double>(prev - start).count();
+    out.count = long(lengths.size());
+    out.per_second = double(out.count) / out.seconds;
+    double lost = 0.0;
+    for (const double l : lengths) lost += l;
+    out.lost_fraction = lost * 1e-6 / out.seconds;
+    if (!lengths.empty()) out.length_us = percentiles(lengths);
+    return out;
 }
 
 }  // namespace sulcus::cli
