@@ -82,9 +82,9 @@ BenchRun run_bench(const BenchScene& b, RendererSettings settings, const BenchRu
         if (options.check_every > 0 && has_force && contact_ticks++ % options.check_every == 0) to_check.push_back(i);
     }
     // Further runs from a fresh state (a new session: the step's caches start over), after the
-    // machine's caches are flushed. The same
-    // input must give the same answer to the bit; the least time per tick leaves out what the
-    // machine took from the thread in one run but not in another.
+    // machine's caches are flushed. The same input must give the same answer to the bit; the
+    // least time per tick leaves out what the machine took from the thread in one run but not in
+    // another.
     std::vector<unsigned char> evict;
     for (int k = 1; k < runs; ++k) {
         evict_caches(evict);
@@ -127,7 +127,8 @@ Interruptions probe_interruptions(double seconds, double threshold_us) {
     Interruptions out;
     if (!(seconds > 0.0)) return out;
     std::vector<double> lengths;
-    lengths.reserve(size_t(seconds * 20000.0) + 16);
+    // Room for every gap there can be: none is shorter than the threshold.
+    lengths.reserve(size_t(seconds * 1e6 / std::max(threshold_us, 1.0)) + 16);
     const Clock::time_point start = Clock::now();
     Clock::time_point prev = start;
     const auto span = std::chrono::duration<double>(seconds);
