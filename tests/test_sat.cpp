@@ -274,6 +274,47 @@ TEST(CapsuleBound, IsTheLeastOverEveryCapsule) {
     EXPECT_GT(spared, 10000);  // most triangles leave some capsule unmeasured
 }
 
+// The tangent bound on a capsule's distance to a triangle is never above the exact distance (the
+// segment's to the triangle less the radius), never below the sphere's bound by more than its
+// nanometre of room, and for a small triangle beside the capsule (a gingiva triangle beside the
+// probe) within a few micrometres of the distance, where the sphere's bound is off by about the
+// triangle's size.
+TEST(CapsuleBound, TangentBoundIsBelowTheDistanceAndAboveTheSphere) {
+    std::mt19937 rng(12);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const double scale = 1e-3;
+    int beside = 0, tight = 0, sphere_tight = 0;
+    for (int t = 0; t < 50000; ++t) {
+        const Vec3 p0 = scale * Vec3(u(rng), u(rng), u(rng)), p1 = p0 + 2.0 * scale * Vec3(u(rng), u(rng), u(rng));
+        const double r = 0.25 * scale * (1.0 + u(rng));
+        // A triangle at a random place, or a small one beside the axis (one in four).
+        const bool small = t % 4 == 0;
+        const double s = (small ? 0.05 : (t % 2 == 0 ? 2.0 : 0.3)) * scale;
+        Vec3 c = scale * Vec3(u(rng), u(rng), u(rng)) * 2.0;
+        if (small) {
+            const Vec3 d = p1 - p0;
+            const Vec3 side = glm::normalize(glm::cross(d, Vec3(u(rng), u(rng), u(rng))));
+            c = p0 + 0.5 * (1.0 + u(rng)) * d + side * (r + 0.1 * scale * (1.5 + u(rng)));
+        }
+        const Vec3 a = c + s * Vec3(u(rng), u(rng), u(rng)), b = c + s * Vec3(u(rng), u(rng), u(rng)),
+                   e = c + s * Vec3(u(rng), u(rng), u(rng));
+        const TriangleSphere ts = triangle_sphere(a, b, e);
+        const double exact = segment_triangle_distance(p0, p1, a, b, e) - r;
+        const double tangent = capsule_tangent_lower(p0, p1, r, ts, a, b, e);
+        const double sphere = capsule_sphere_lower(p0, p1, r, ts);
+        ASSERT_LE(tangent, exact) << "trial " << t;
+        ASSERT_GE(tangent, sphere - 2e-9) << "trial " << t;
+        if (small && exact > 0.0) {
+            ++beside;
+            tight += exact - tangent < 5e-6;
+            sphere_tight += exact - sphere < 5e-6;
+        }
+    }
+    EXPECT_GT(beside, 10000);
+    EXPECT_GT(tight, beside * 9 / 10);         // the tangent bound is tight beside the capsule
+    EXPECT_LT(sphere_tight, beside / 10);      // where the sphere's is not
+}
+
 TEST(CapsuleBound, OnlyLongToolsUseCapsules) {
     const ModelBuild box = build_model(make_box(Vec3(1e-3, 2e-3, 0.5e-3)), {}, RendererSettings{});
     ASSERT_TRUE(box.model);

@@ -147,6 +147,26 @@ inline double capsule_sphere_lower(const Vec3& p0, const Vec3& p1, double r, con
     return glm::length(off - s * d) - ts.radius - r;
 }
 
+// A lower bound on the distance between capsule (axis p0-p1, radius r) and triangle (a, b, e) of
+// bounding sphere `ts` (round its centroid), no less than capsule_sphere_lower but for a nanometre's
+// room for rounding: the distance from the axis is a convex function, so over the triangle it is no
+// less than its tangent plane at the centre, whose least is at a vertex. For a small triangle
+// beside the capsule, within a few nanometres of their distance.
+inline double capsule_tangent_lower(const Vec3& p0, const Vec3& p1, double r, const TriangleSphere& ts, const Vec3& a,
+                                    const Vec3& b, const Vec3& e) {
+    const Vec3 d = p1 - p0, off = ts.centre - p0;
+    const double dd = glm::dot(d, d);
+    const double s = dd > 0.0 ? std::clamp(glm::dot(off, d) / dd, 0.0, 1.0) : 0.0;
+    const Vec3 q = off - s * d;
+    const double f = glm::length(q);
+    if (!(f > 0.0)) return f - ts.radius - r;
+    const Vec3 g = q / f;
+    const double least = std::min(std::min(glm::dot(g, a - ts.centre), glm::dot(g, b - ts.centre)),
+                                  glm::dot(g, e - ts.centre));
+    const double room = 1e-9 + 1e-12 * (glm::length(ts.centre) + glm::length(p0) + f + ts.radius);
+    return f + std::max(least, -ts.radius) - r - room;
+}
+
 // A lower bound on the distance between the polytope and the triangle from its bounding capsules
 // (-infinity without them); <= 0 says nothing.
 double capsule_lower_bound(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c);

@@ -415,9 +415,22 @@ double piece_capsule_bound(const ToolPiece& piece, const CapsuleLine& line, cons
     return least_over_capsules(piece, line, ts, capsule, nearest);
 }
 
-// The least over the piece's capsules of the sphere's bound (capsule_sphere_lower).
-double piece_sphere_bound(const ToolPiece& piece, const CapsuleLine& line, const TriangleSphere& ts) {
+// A lower bound on the separation of a piece and a triangle (a, b, e) of a compliant object, which
+// the tool may be inside: where the capsules' tangent bounds (capsule_tangent_lower) put the
+// triangle clear of every capsule, the least of them (the distance, which is the separation where
+// they are apart); else the least over the capsules of the sphere's bound (capsule_sphere_lower),
+// which bounds how deep they overlap as well.
+double piece_compliant_bound(const ToolPiece& piece, const CapsuleLine& line, const TriangleSphere& ts, const Vec3& a,
+                             const Vec3& b, const Vec3& e) {
     int nearest = 0;
+    const double apart = least_over_capsules(
+        piece, line, ts,
+        [&](int j) {
+            return capsule_tangent_lower(line.axis[j], line.axis[j + 1], piece.capsule_radii_m[size_t(j)], ts, a, b,
+                                         e);
+        },
+        nearest);
+    if (apart > 0.0) return apart;
     return least_over_capsules(
         piece, line, ts,
         [&](int j) {
@@ -667,8 +680,8 @@ bool prior_covers(const Model& model, size_t k, const Pose& at, const Mat3& fram
 // only triangles whose verdict the motion since their last measurement leaves open are measured;
 // either way an object's triangles come in the order of their indices. A compliant object (which
 // the tool enters) gives the triangles whose boxes meet the piece's box inflated by the tool's
-// reach `reach_all`: gather_atoms looks among them for the face that holds a tool vertex inside
-// it. A compact piece takes the triangles in its box inflated by its reach. With `any_only`, stops
+// reach `reach_all`, each with the capsules' bound (piece_compliant_bound): gather_atoms looks
+// among them for the face that holds a tool vertex inside it. A compact piece takes the triangles in its box inflated by its reach. With `any_only`, stops
 // at the first triangle the capsules' bound keeps. With `prior_frame` (the frame of the box), a
 // piece whose reach the earlier pass's near set covers (prior_covers) takes its triangles from
 // that set, measured again only where the motion since leaves their verdict open. Needs the
@@ -727,8 +740,11 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                 Aabb b = box;
                 b.inflate(obj.compliant ? reach_all : reach);
                 obj.bvh.query(b, [&](uint32_t tri) {
+                    const auto& t = obj.mesh.triangles[tri];
                     const double bound = piece.capsule_count > 0
-                                             ? piece_sphere_bound(piece, line, obj.topology.triangle_spheres[tri])
+                                             ? piece_compliant_bound(piece, line, obj.topology.triangle_spheres[tri],
+                                                                     obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
+                                                                     obj.mesh.vertices[t[2]])
                                              : -1e300;
                     return push(NearTri{ok, tri, pk, bound});
                 });
@@ -1905,10 +1921,12 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         // further than that from the piece there cannot be reached, nor can one whose separation
         // there (along its separating axis) leaves room for that motion. The separations at the
         // start are found once per pass, on the tool's planes there (still in place here).
-        // A compliant object's triangle comes with the capsules' bound, which bounds the
-        // separation from below where they overlap too (the piece and the triangle lie inside the
-        // capsule and the sphere, which overlap at least as deep): where that bound, less the
-        // motion, is within the zone's give, the triangle needs no test.
+        // A compliant object's triangle comes with the capsules' bound (piece_compliant_bound):
+        // the distance where the capsules' tangent bounds put it clear of them, else the spheres'
+        // bound, which bounds the separation from below where they overlap too (the piece and the
+        // triangle lie inside the capsule and the sphere, which overlap at least as deep): where
+        // that bound, less the motion, is within the zone's give, the triangle needs no test; and
+        // one clear of the piece by more than the motion needs none either.
         const double shift = glm::length(nx.p - base.position), turn = glm::length(Vec3(x[3], x[4], x[5]));
         auto bound_settles = [&](const NearTri& nt, double moved_by, double give) {
             return model.objects[nt.object].compliant && nt.lower_m - moved_by >= -(S.constraint_tol_m + give);
