@@ -669,6 +669,30 @@ bool prior_covers(const Model& model, size_t k, const Pose& at, const Mat3& fram
     return true;
 }
 
+// The triangles of `obj` whose boxes meet box `b`, for piece `pk` (a compliant object's, or any
+// object's for a piece without capsules), each with the capsules' bound (piece_compliant_bound;
+// none without capsules), in the hierarchy's order; with `any_only`, the first. False on overflow.
+// Apart from gather_near, whose walk over the rigid objects' triangles it would otherwise crowd.
+[[gnu::noinline]] bool gather_in_box(const ModelObject& obj, uint16_t ok, const ToolPiece& piece, uint8_t pk,
+                                     const CapsuleLine& line, const Aabb& b, bool any_only, Workspace& w) {
+    bool overflow = false;
+    obj.bvh.query(b, [&](uint32_t tri) {
+        if (w.near_count >= kMaxNear) {
+            overflow = true;
+            return false;
+        }
+        const auto& t = obj.mesh.triangles[tri];
+        const double bound = piece.capsule_count > 0
+                                 ? piece_compliant_bound(piece, line, obj.topology.triangle_spheres[tri],
+                                                         obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
+                                                         obj.mesh.vertices[t[2]])
+                                 : -1e300;
+        w.near[w.near_count++] = NearTri{ok, tri, pk, bound};
+        return !any_only;
+    });
+    return !overflow;
+}
+
 // detect: the triangles each piece of the tool can reach within the box [lower, upper] of the
 // step's coordinates, each with a lower bound on its distance from the piece (for the guard).
 // Against a rigid object a long piece (a probe's tip or shank) is bounded by its capsules: the BVH
@@ -739,15 +763,10 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
             if (obj.compliant || piece.capsule_count == 0) {
                 Aabb b = box;
                 b.inflate(obj.compliant ? reach_all : reach);
-                obj.bvh.query(b, [&](uint32_t tri) {
-                    const auto& t = obj.mesh.triangles[tri];
-                    const double bound = piece.capsule_count > 0
-                                             ? piece_compliant_bound(piece, line, obj.topology.triangle_spheres[tri],
-                                                                     obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
-                                                                     obj.mesh.vertices[t[2]])
-                                             : -1e300;
-                    return push(NearTri{ok, tri, pk, bound});
-                });
+                // Most objects are nowhere near the piece: their hierarchy's root says so here.
+                const auto& nodes = obj.bvh.nodes();
+                if (nodes.empty() || !nodes[0].box.overlaps(b)) continue;
+                overflow = !gather_in_box(obj, ok, piece, pk, line, b, any_only, w);
                 if (overflow) return false;
                 if (any_only && w.near_count > 0) return true;
                 continue;
