@@ -167,6 +167,46 @@ inline double capsule_tangent_lower(const Vec3& p0, const Vec3& p1, double r, co
     return f + std::max(least, -ts.radius) - r - room;
 }
 
+// The same for the tapered capsule round axis p0-p1: the hull of the balls of radii r0 at p0 and
+// r1 at p1 (|r0 - r1| less than their distance apart). Its distance from a point off it is convex
+// too: from the near ball where the point is beyond the cone that touches both, else from that
+// cone along its normal. Never more than the distance from the taper to the triangle.
+inline double taper_tangent_lower(const Vec3& p0, const Vec3& p1, double r0, double r1, const TriangleSphere& ts,
+                                  const Vec3& a, const Vec3& b, const Vec3& e) {
+    const Vec3 d = p1 - p0, off = ts.centre - p0;
+    const double length = glm::length(d);
+    if (!(length > 0.0) || !(std::abs(r0 - r1) < length))
+        return capsule_tangent_lower(p0, p1, std::max(r0, r1), ts, a, b, e);
+    const Vec3 axis = d / length;
+    const double s = glm::dot(off, axis);
+    const Vec3 q = off - s * axis;
+    const double rho = glm::length(q);
+    const double sin_a = (r0 - r1) / length, cos_a = std::sqrt(std::max(0.0, 1.0 - sin_a * sin_a));
+    const double along = s * cos_a - rho * sin_a;  // along the cone's side from where it meets ball 0
+    double f;
+    Vec3 g;
+    if (along < 0.0) {
+        f = glm::length(off);
+        if (!(f > 0.0)) return f - ts.radius - r0;
+        g = off / f;
+        f -= r0;
+    } else if (along > length * cos_a) {
+        const Vec3 off1 = ts.centre - p1;
+        f = glm::length(off1);
+        if (!(f > 0.0)) return f - ts.radius - r1;
+        g = off1 / f;
+        f -= r1;
+    } else {
+        if (!(rho > 0.0)) return capsule_sphere_lower(p0, p1, std::max(r0, r1), ts);
+        g = sin_a * axis + cos_a * (q / rho);
+        f = s * sin_a + rho * cos_a - r0;
+    }
+    const double least = std::min(std::min(glm::dot(g, a - ts.centre), glm::dot(g, b - ts.centre)),
+                                  glm::dot(g, e - ts.centre));
+    const double room = 1e-9 + 1e-12 * (glm::length(ts.centre) + glm::length(p0) + glm::length(off) + ts.radius);
+    return f + std::max(least, -ts.radius) - room;
+}
+
 // A lower bound on the distance between the polytope and the triangle from its bounding capsules
 // (-infinity without them); <= 0 says nothing.
 double capsule_lower_bound(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c);

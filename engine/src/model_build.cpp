@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 namespace sulcus {
 
@@ -51,15 +52,23 @@ void set_bounding_capsule(const TriMesh& piece_mesh, ToolPiece& tool) {
     auto radial = [&](const Vec3& x) { return glm::length((x - c) - glm::dot(x - c, axis) * axis); };
     auto slab_of = [&](double s) { return std::clamp(int(std::floor((s - lo) / (hi - lo) * K)), 0, K - 1); };
     std::array<double, K> r{};
+    // Each slab's points (axial coordinate from the slab's start over its length, radial
+    // distance), for the taper below.
+    std::array<std::vector<std::array<double, 2>>, K> points;
+    const double length = (hi - lo) / K;
+    auto add = [&](int k, double s, double rr) {
+        r[size_t(k)] = std::max(r[size_t(k)], rr);
+        points[size_t(k)].push_back({(s - (lo + length * k)) / length, rr});
+    };
     for (const Vec3& v : vs) {
         const double s = glm::dot(v - c, axis);
-        r[size_t(slab_of(s))] = std::max(r[size_t(slab_of(s))], radial(v));
+        add(slab_of(s), s, radial(v));
         // A vertex on a cut belongs to both slabs.
         const double u = (s - lo) / (hi - lo) * K;
         const int near = int(std::lround(u));
         if (std::abs(u - near) < 1e-9 && near > 0 && near < K) {
-            r[size_t(near - 1)] = std::max(r[size_t(near - 1)], radial(v));
-            r[size_t(near)] = std::max(r[size_t(near)], radial(v));
+            add(near - 1, s, radial(v));
+            add(near, s, radial(v));
         }
     }
     for (const auto& tri : piece_mesh.triangles)
@@ -71,12 +80,49 @@ void set_bounding_capsule(const TriMesh& piece_mesh, ToolPiece& tool) {
                 const double cut = lo + (hi - lo) * k / K;
                 if ((sa - cut) * (sb - cut) >= 0.0) continue;
                 const double rr = radial(a + (b - a) * ((cut - sa) / (sb - sa)));
-                r[size_t(k - 1)] = std::max(r[size_t(k - 1)], rr);
-                r[size_t(k)] = std::max(r[size_t(k)], rr);
+                add(k - 1, cut, rr);
+                add(k, cut, rr);
             }
         }
     // A hair over, so rounding never puts a point outside.
     for (int k = 0; k < K; ++k) tool.capsule_radii_m[size_t(k)] = r[size_t(k)] * (1.0 + 1e-9) + 1e-12;
+    // The taper: the line over the slab's points (radius against axial position) lowest at the
+    // slab's middle, a side of their upper hull. The slab is the hull of those points, and the
+    // truncated cone under that line holds them, so it holds the slab; the hull of the balls at
+    // the ends holds the cone. Where the line comes out over the capsule's radius or under zero
+    // at an end, or the balls would hold one another, the capsule itself.
+    for (int k = 0; k < K; ++k) {
+        const double cap = tool.capsule_radii_m[size_t(k)];
+        tool.taper_radii_m[size_t(k)] = {cap, cap};
+        auto& pts = points[size_t(k)];
+        std::sort(pts.begin(), pts.end());
+        std::vector<std::array<double, 2>> upper;  // the upper hull, left to right
+        for (const auto& q : pts) {
+            while (upper.size() >= 2) {
+                const auto& o = upper[upper.size() - 2];
+                const auto& m = upper.back();
+                if ((m[0] - o[0]) * (q[1] - o[1]) - (m[1] - o[1]) * (q[0] - o[0]) >= 0.0) upper.pop_back();
+                else break;
+            }
+            upper.push_back(q);
+        }
+        double a0 = -1.0, slope = 0.0;
+        for (size_t i = 0; i + 1 < upper.size(); ++i) {
+            const auto &p0 = upper[i], &p1 = upper[i + 1];
+            if (p0[0] <= 0.5 && p1[0] >= 0.5 && p1[0] > p0[0]) {
+                slope = (p1[1] - p0[1]) / (p1[0] - p0[0]);
+                a0 = p0[1] - slope * p0[0];
+                break;
+            }
+        }
+        if (!(a0 >= 0.0)) continue;
+        // Over every point by its rounding, then a hair more.
+        double lift = 0.0;
+        for (const auto& q : pts) lift = std::max(lift, q[1] - (a0 + slope * q[0]));
+        const double r0 = (a0 + lift) * (1.0 + 1e-9) + 1e-12, r1 = (a0 + slope + lift) * (1.0 + 1e-9) + 1e-12;
+        if (!(r0 >= 0.0 && r1 >= 0.0 && r0 <= cap && r1 <= cap && std::abs(r0 - r1) < 0.5 * length)) continue;
+        tool.taper_radii_m[size_t(k)] = {r0, r1};
+    }
     const double widest = *std::max_element(tool.capsule_radii_m.begin(), tool.capsule_radii_m.end());
     tool.capsule_count = (hi - lo) > 4.0 * widest ? K : 0;
 }

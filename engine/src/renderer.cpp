@@ -439,6 +439,21 @@ double piece_compliant_bound(const ToolPiece& piece, const CapsuleLine& line, co
         nearest);
 }
 
+// The least over a piece's tapered capsules (ToolPiece::taper_radii_m) of their tangent bound on
+// the distance to triangle (a, b, e) of bounding sphere ts: tighter than the capsules' on a
+// tapering probe, and dearer. Above zero, the triangle is that far from the piece at least.
+double piece_taper_bound(const ToolPiece& piece, const CapsuleLine& line, const TriangleSphere& ts, const Vec3& a,
+                         const Vec3& b, const Vec3& e) {
+    int nearest = 0;
+    return least_over_capsules(
+        piece, line, ts,
+        [&](int j) {
+            const auto& taper = piece.taper_radii_m[size_t(j)];
+            return taper_tangent_lower(line.axis[j], line.axis[j + 1], taper[0], taper[1], ts, a, b, e);
+        },
+        nearest);
+}
+
 // Whether a triangle of a rigid object is within `reach` of piece k (which has capsules), and
 // bounds [lo, hi] on their distance: the capsules' bound first, then GJK from the nearest
 // capsule's axis to within `tol`; where rounding stalls GJK short of a verdict, the exact
@@ -1984,10 +1999,24 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             // rests on): no bound here spares it the check at the new pose. Left unmeasured for a
             // candidate that moves the tool less.
             if (nt.upper_m < floor) continue;
-            ++w.tests;
             const ModelObject& obj = model.objects[nt.object];
             const auto& t = obj.mesh.triangles[nt.tri];
             const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
+            // A compliant triangle clear of the floor by the tapered capsules needs no search:
+            // beside a tapering probe they bound it some tens of micrometres closer than the
+            // capsules did in detect.
+            const ToolPiece& piece = model.tool.pieces[nt.piece];
+            if (compliant && piece.capsule_count > 0 && floor > 0.0) {
+                const CapsuleLine line = capsule_line(piece, w.capsule + nt.piece * (kToolCapsules + 1));
+                const double taper =
+                    piece_taper_bound(piece, line, obj.topology.triangle_spheres[nt.tri], t0, t1, t2);
+                if (taper >= floor) {
+                    nt.separation_m = std::max(taper, nt.lower_m);
+                    if (remember) near_cache_keep_separation(w.cache, nt.object, nt.tri, nt.piece, nt.separation_m);
+                    continue;
+                }
+            }
+            ++w.tests;
             // GJK's gap along its directions, until it reaches the floor (a bound as good as
             // the separation, cheaper) or the distance is found under it; the witnesses' bound
             // where they touch and the floor allows an overlap.

@@ -138,6 +138,10 @@ struct ToolPiece {
     // such as a probe's tip and shank.
     std::array<Vec3, kToolCapsules + 1> capsule_points{};
     std::array<double, kToolCapsules> capsule_radii_m{};
+    // Capsule k tapered: the hull of the balls of radii taper_radii_m[k][0] and [k][1] round its
+    // two ends (each no more than capsule_radii_m[k]) still holds the slab of the piece it covers.
+    // A tapering probe's slab lies far closer to it than to the capsule.
+    std::array<std::array<double, 2>, kToolCapsules> taper_radii_m{};
     // kToolCapsules for a long piece (axis over four times its widest capsule), else 0: for a
     // compact piece the bounds are loose and cost more than they save.
     int capsule_count = 0;
