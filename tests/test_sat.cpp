@@ -343,8 +343,8 @@ void taper_bound_holds(ProbeKind kind, unsigned seed) {
         const ConvexView plain = pt.view(true);
         // A small triangle beside the piece: off a vertex, outwards from the axis.
         const Vec3 v = pt.verts[size_t(rng() % pt.verts.size())];
-        const Vec3 on_axis = view.capsule[0] + glm::dot(v - view.capsule[0], glm::normalize(view.capsule[kToolCapsules] - view.capsule[0])) *
-                                                   glm::normalize(view.capsule[kToolCapsules] - view.capsule[0]);
+        const Vec3 axis = glm::normalize(view.capsule[kToolCapsules] - view.capsule[0]);
+        const Vec3 on_axis = view.capsule[0] + glm::dot(v - view.capsule[0], axis) * axis;
         const Vec3 out = glm::length(v - on_axis) > 0.0 ? glm::normalize(v - on_axis) : Vec3(1.0, 0.0, 0.0);
         const bool small = t % 2 == 0;
         const Vec3 c = v + out * (small ? 0.1e-3 * (1.2 + u(rng)) : 0.5e-3 * (1.0 + u(rng))) +
@@ -361,7 +361,8 @@ void taper_bound_holds(ProbeKind kind, unsigned seed) {
             capsule = std::min(capsule, capsule_tangent_lower(view.capsule[k], view.capsule[k + 1],
                                                               view.capsule_radii[k], ts, a, b, d));
         }
-        const double exact = distance_convex_triangle_by_faces(plain, tris, int(pt.tool->mesh.triangles.size()), a, b, d);
+        const double exact =
+            distance_convex_triangle_by_faces(plain, tris, int(pt.tool->mesh.triangles.size()), a, b, d);
         ASSERT_LE(taper, exact) << "trial " << t;
         if (small && exact > 0.0) {
             ++beside;
@@ -372,7 +373,6 @@ void taper_bound_holds(ProbeKind kind, unsigned seed) {
     EXPECT_GT(beside, 1000);
     // By how much the bounds fall short of the distance, summed: Williams 36.5 against 71.8 µm a
     // triangle on average, Nabers (short and curved, the taper helps less) 81.8 against 105.5 µm.
-    EXPECT_GT(beside, 1000);
     EXPECT_LT(slack_taper, 0.9 * slack_capsule);
 }
 

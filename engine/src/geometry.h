@@ -147,6 +147,16 @@ inline double capsule_sphere_lower(const Vec3& p0, const Vec3& p1, double r, con
     return glm::length(off - s * d) - ts.radius - r;
 }
 
+// The least over triangle (a, b, e) of the offset from the centre of its sphere `ts` along unit
+// direction g, no less than minus the sphere's radius: what a tangent plane with gradient g at the
+// centre drops to over the triangle (at a vertex, the triangle being their hull).
+inline double triangle_drop_along(const Vec3& g, const TriangleSphere& ts, const Vec3& a, const Vec3& b,
+                                  const Vec3& e) {
+    const double least = std::min(std::min(glm::dot(g, a - ts.centre), glm::dot(g, b - ts.centre)),
+                                  glm::dot(g, e - ts.centre));
+    return std::max(least, -ts.radius);
+}
+
 // A lower bound on the distance between capsule (axis p0-p1, radius r) and triangle (a, b, e) of
 // bounding sphere `ts` (round its centroid), no less than capsule_sphere_lower but for a nanometre's
 // room for rounding: the distance from the axis is a convex function, so over the triangle it is no
@@ -160,11 +170,8 @@ inline double capsule_tangent_lower(const Vec3& p0, const Vec3& p1, double r, co
     const Vec3 q = off - s * d;
     const double f = glm::length(q);
     if (!(f > 0.0)) return f - ts.radius - r;
-    const Vec3 g = q / f;
-    const double least = std::min(std::min(glm::dot(g, a - ts.centre), glm::dot(g, b - ts.centre)),
-                                  glm::dot(g, e - ts.centre));
     const double room = 1e-9 + 1e-12 * (glm::length(ts.centre) + glm::length(p0) + f + ts.radius);
-    return f + std::max(least, -ts.radius) - r - room;
+    return f + triangle_drop_along(q / f, ts, a, b, e) - r - room;
 }
 
 // The same for the tapered capsule round axis p0-p1: the hull of the balls of radii r0 at p0 and
@@ -201,10 +208,8 @@ inline double taper_tangent_lower(const Vec3& p0, const Vec3& p1, double r0, dou
         g = sin_a * axis + cos_a * (q / rho);
         f = s * sin_a + rho * cos_a - r0;
     }
-    const double least = std::min(std::min(glm::dot(g, a - ts.centre), glm::dot(g, b - ts.centre)),
-                                  glm::dot(g, e - ts.centre));
     const double room = 1e-9 + 1e-12 * (glm::length(ts.centre) + glm::length(p0) + glm::length(off) + ts.radius);
-    return f + std::max(least, -ts.radius) - room;
+    return f + triangle_drop_along(g, ts, a, b, e) - room;
 }
 
 // A lower bound on the distance between the polytope and the triangle from its bounding capsules

@@ -712,19 +712,20 @@ bool prior_covers(const Model& model, size_t k, const Pose& at, const Mat3& fram
 // step's coordinates, each with a lower bound on its distance from the piece (for the guard).
 // Against a rigid object a long piece (a probe's tip or shank) is bounded by its capsules: the BVH
 // is walked along the chain of capsules, and a triangle is kept only when its distance bound to
-// some capsule, and then its distance to the piece itself (GJK), are within how far that piece
-// can move -- so a tilted probe does not collect the whole surface inside its box, nor the
-// triangles its capsules' roundness comes near, and nothing it could touch is left out. With the
-// near cache (RendererSettings::near_cache) the walk is over the piece's superset instead, and
-// only triangles whose verdict the motion since their last measurement leaves open are measured;
-// either way an object's triangles come in the order of their indices. A compliant object (which
-// the tool enters) gives the triangles whose boxes meet the piece's box inflated by the tool's
-// reach `reach_all`, each with the capsules' bound (piece_compliant_bound): gather_atoms looks
-// among them for the face that holds a tool vertex inside it. A compact piece takes the triangles in its box inflated by its reach. With `any_only`, stops
-// at the first triangle the capsules' bound keeps. With `prior_frame` (the frame of the box), a
-// piece whose reach the earlier pass's near set covers (prior_covers) takes its triangles from
-// that set, measured again only where the motion since leaves their verdict open. Needs the
-// tool's vertices, planes and capsules placed at pose `at` (set_tool_planes). False on overflow.
+// some capsule, and then its distance to the piece itself (GJK), are within how far that piece can
+// move -- so a tilted probe does not collect the whole surface inside its box, nor the triangles
+// its capsules' roundness comes near, and nothing it could touch is left out. With the near cache
+// (RendererSettings::near_cache) the walk is over the piece's superset instead, and only triangles
+// whose verdict the motion since their last measurement leaves open are measured; either way an
+// object's triangles come in the order of their indices. A compliant object (which the tool enters)
+// gives the triangles whose boxes meet the piece's box inflated by the tool's reach `reach_all`,
+// each with the capsules' bound (piece_compliant_bound): gather_atoms looks among them for the face
+// that holds a tool vertex inside it. A compact piece takes the triangles in its box inflated by
+// its reach. With `any_only`, stops at the first triangle the capsules' bound keeps. With
+// `prior_frame` (the frame of the box), a piece whose reach the earlier pass's near set covers
+// (prior_covers) takes its triangles from that set, measured again only where the motion since
+// leaves their verdict open. Needs the tool's vertices, planes and capsules placed at pose `at`
+// (set_tool_planes). False on overflow.
 bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, const double lower[6],
                  const double upper[6], double reach_all, Workspace& w, bool any_only = false,
                  const Mat3* prior_frame = nullptr) {
@@ -1972,6 +1973,11 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         // A compliant triangle's separation at an earlier pose, less the motion since
         // (SeparationMemo), comes first; what is found here is remembered.
         const bool memo = S.near_cache && near_cache_at(w.cache, model, base);
+        // The pieces' capsule lines at the start, for the tapers' bound below.
+        CapsuleLine lines[kMaxToolPieces];
+        for (size_t k = 0; k < model.tool.pieces.size(); ++k)
+            if (model.tool.pieces[k].capsule_count > 0)
+                lines[k] = capsule_line(model.tool.pieces[k], w.capsule + k * (kToolCapsules + 1));
         for (int i = 0; i < w.near_count; ++i) {
             NearTri& nt = w.near[i];
             const double moved_by = shift + turn * model.tool.pieces[nt.piece].radius_m;
@@ -2007,9 +2013,8 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             // capsules did in detect.
             const ToolPiece& piece = model.tool.pieces[nt.piece];
             if (compliant && piece.capsule_count > 0 && floor > 0.0) {
-                const CapsuleLine line = capsule_line(piece, w.capsule + nt.piece * (kToolCapsules + 1));
                 const double taper =
-                    piece_taper_bound(piece, line, obj.topology.triangle_spheres[nt.tri], t0, t1, t2);
+                    piece_taper_bound(piece, lines[nt.piece], obj.topology.triangle_spheres[nt.tri], t0, t1, t2);
                 if (taper >= floor) {
                     nt.separation_m = std::max(taper, nt.lower_m);
                     if (remember) near_cache_keep_separation(w.cache, nt.object, nt.tri, nt.piece, nt.separation_m);
