@@ -165,6 +165,52 @@ TEST(Compliance, DepthFollowsTheYieldCurve) {
     EXPECT_LE(worst_exact, 1e-6);
 }
 
+// And on the way out: the floor pushes the tool back as the hand draws back, so the depth follows
+// the curve down again (the tool is held away from a haptic tool still deeper than it, which only
+// the springs' energy lets it go). Drawn back at 1 mm/s along the stiffening curve, and at 40 mm/s
+// (40 um a tick) out of a soft linear one: every tick at equilibrium, the force falling steadily.
+TEST(Compliance, DepthFollowsTheCurveAsTheHandDrawsBack) {
+    struct Run {
+        ContactMaterial material;
+        double rate_m_per_tick;
+    };
+    for (const Run& run : {Run{stiffening(), 1e-6}, Run{linear("gum", 500.0), 40e-6}}) {
+        SCOPED_TRACE(run.rate_m_per_tick);
+        const std::vector<SceneObject> objects = {slab(0)};
+        auto model = build(cube(), objects, {run.material});
+        ModelMaterial m;
+        ASSERT_EQ(material_from_curve(run.material, m), "");
+        const std::vector<PlacedMesh> placed = {PlacedMesh{&objects[0].mesh, objects[0].pose}};
+        State state = make_state(pose(Vec3(0, 0.1 * mm, 0)));
+        // In to 1.3 mm below the surface at 1 mm/s, held, then out at the run's rate.
+        for (int i = 0; i <= 1400; ++i) step(*model, state, pose(Vec3(0, 0.1 * mm - 1e-6 * i, 0)));
+        const double deepest = 0.1 * mm - 1400e-6;
+        StepResult r;
+        for (int i = 0; i < 100; ++i) r = step(*model, state, pose(Vec3(0, deepest, 0)));
+        const double pressed = glm::length(r.force_N);
+        ASSERT_GT(pressed, 0.4);
+        int checked = 0;
+        double worst = 0.0, worst_exact = 0.0, rise = 0.0, last = pressed;
+        for (int i = 1; deepest + run.rate_m_per_tick * i < 0.1 * mm; ++i) {
+            r = step(*model, state, pose(Vec3(0, deepest + run.rate_m_per_tick * i, 0)));
+            ASSERT_NE(r.status, StepStatus::Held) << "tick " << i;
+            const double force = glm::length(r.force_N);
+            rise = std::max(rise, force - last);
+            last = force;
+            if (force < 1e-3) continue;
+            worst = std::max(worst, std::abs(r.stats.soft_depth_m - material_depth(m, force)));
+            worst_exact = std::max(
+                worst_exact, std::abs(exact_check(cube(), r.graphic, placed, 0.0).penetration_m - material_depth(m, force)));
+            ++checked;
+        }
+        EXPECT_GT(checked, 20);
+        EXPECT_LE(worst, 1e-9);
+        EXPECT_LE(worst_exact, 1e-6);
+        EXPECT_LE(rise, 1e-9);  // never up again on the way out: no tick held back and let go at the next
+        EXPECT_EQ(r.status, StepStatus::Free);
+    }
+}
+
 // Slid from a rigid slab onto a compliant one while pressing: no penetration of the rigid one,
 // the expected depth in the compliant one, and a force step bounded by the force-continuity
 // limit at the switch.

@@ -65,30 +65,54 @@ TEST(CompliantSession, LeaningInTheTissueNeedsNoPassAfterPass) {
     EXPECT_LE(extra, contact / 100);
 }
 
-// At the end of the session the probe is drawn out of the tissue faster than the force-continuity
-// limit lets the graphic tool follow: the step releases it to the haptic pose. The step's box
-// then reaches some 2 mm (the energy bound lets the tool turn far), which brought in more gingiva
-// triangles than the near list holds, so the step halved the motion and, with a thousand atoms
-// and the atom list full, ended short of the haptic pose (6 ms). The straight motion's box
-// settles it: the released tick ends at the haptic pose, nothing truncated.
-TEST(CompliantSession, DrawingOutOfTheTissueReleasesTheToolToTheHapticPose) {
+// At the end of the session the probe, pressed 0.4 mm into the pocket floor at 0.2 N, is drawn
+// out. The floor gives back what it took: the graphic tool rises with the hand, held away from it
+// (the hand is still deeper) by the floor alone, so the force falls steadily to nothing as the
+// tip comes out, and the tool leaves the tissue at the haptic pose. Before, the step's box held
+// each coordinate to the bound of eq. 3's energy without the springs' (the tool could not move
+// away from a haptic tool deeper than it): the tool stayed where it was pressed until the hand
+// passed it, the force stepped at the end, and the step had to release the tool (whose box then
+// brought in more gingiva triangles than the near list holds, ending short of the haptic pose).
+// Nothing is truncated, no tick is partial or released.
+TEST(CompliantSession, DrawnOutTheProbeRisesWithTheHandAndLeavesTheTissue) {
     const cli::BenchScene b = load_session();
-    ASSERT_FALSE(b.ticks.empty());
+    const size_t deep = 4600;  // still 0.4 mm in the floor, pressed at 0.2 N
+    ASSERT_GT(b.ticks.size(), deep + 200);
     ModelBuild mb = session_model(b);
     ASSERT_TRUE(mb.model) << mb.error;
     State state = make_state(b.ticks.front());
-    int released = 0, released_short = 0, truncated = 0, partial = 0;
-    for (size_t i = 0; i < b.ticks.size(); ++i) {
-        const StepResult r = step(*mb.model, state, b.ticks[i]);
+    int released = 0, truncated = 0, partial = 0;
+    StepResult r;
+    auto tick = [&](size_t i) {
+        r = step(*mb.model, state, b.ticks[i]);
         truncated += r.stats.gather_truncated;
         partial += r.status == StepStatus::Partial;
-        if (!r.stats.released) continue;
-        ++released;
-        const bool at_haptic = r.graphic.position == b.ticks[i].position;
-        released_short += r.status != StepStatus::Contact && !at_haptic;
+        released += r.stats.released;
+    };
+    for (size_t i = 0; i <= deep; ++i) tick(i);
+    ASSERT_EQ(r.status, StepStatus::Contact);
+    ASSERT_GT(r.stats.soft_depth_m, 0.3e-3);
+    const double pressed = glm::length(r.force_N);
+    ASSERT_GT(pressed, 0.15);
+    // Out: the force never rises, the floor lets the tip up tick by tick.
+    double last_force = pressed, last_depth = r.stats.soft_depth_m, rise = 0.0, deeper = 0.0;
+    size_t out = 0;
+    for (size_t i = deep + 1; i < b.ticks.size() && out == 0; ++i) {
+        tick(i);
+        const double force = glm::length(r.force_N);
+        rise = std::max(rise, force - last_force);
+        deeper = std::max(deeper, r.stats.soft_depth_m - last_depth);
+        last_force = force;
+        last_depth = r.stats.soft_depth_m;
+        if (r.status != StepStatus::Contact) out = i;
     }
-    EXPECT_GE(released, 1);
-    EXPECT_EQ(released_short, 0);
+    ASSERT_GT(out, deep + 20);  // it took the hand's own pace, not a jump
+    EXPECT_EQ(r.status, StepStatus::Free);
+    EXPECT_EQ(r.graphic.position, b.ticks[out].position);
+    EXPECT_LE(rise, 1e-6);
+    EXPECT_LE(deeper, 1e-9);
+    for (size_t i = out + 1; i < b.ticks.size(); ++i) tick(i);
+    EXPECT_EQ(released, 0);
     EXPECT_EQ(partial, 0);
     EXPECT_EQ(truncated, 0);
 }

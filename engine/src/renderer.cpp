@@ -179,6 +179,7 @@ struct CandidateResult {
     bool ok = false;
     double x[6] = {0, 0, 0, 0, 0, 0};
     double energy = 0.0;
+    double spring_energy_J = 0.0;  // the compliant zones' springs' energy at the answer, in joules
     double error = 0.0;
     int relinearizations = 0;
     int atom_count = 0;
@@ -253,6 +254,8 @@ struct Workspace {
     uint64_t best_key[kMaxAtoms];
     bool best_box_held = false;  // a bound of the box holds the chosen candidate's answer
     double best_energy = 0.0;    // the chosen candidate's energy (eq. 3, with its springs')
+    double best_spring_energy_J = 0.0;  // the springs' share of it, in joules
+    double base_spring_energy_J = 0.0;  // the springs' energy at the pass's base (J)
     // Compliance of the candidate being solved and of the best one: each atom's slack zone
     // (-1: rigid) and the zones' slacks.
     int8_t cand_slot[kMaxAtoms];
@@ -1570,11 +1573,14 @@ void from_frame(const Mat3& R0, const double y[6], double x[6]) {
     x[3] = t.x; x[4] = t.y; x[5] = t.z;
 }
 
-// The local-solution box of eq. 5 about the last graphic pose (x = 0). The paper's box holds each
-// coordinate between 0 and the haptic pose's. The default keeps only the side that stops a
-// coordinate moving away from the haptic pose; on the far side it adds the bound every solution
-// meets anyway (its energy is at most that of x = 0, which is feasible), so the reach of the step
-// stays finite.
+// The local-solution box of eq. 5 about the pass's base (x = 0). The paper's box holds each
+// coordinate between 0 and the haptic pose's; TowardHaptic keeps only the side that stops a
+// coordinate moving away from the haptic pose. Each adds, and the default (None) is only, the
+// bound every solution meets anyway, so that the reach of the step stays finite: its energy is at
+// most that of x = 0 with the compliant zones as deep as at the base, which is feasible. That
+// energy counts the zones' springs (`spring_energy_J`, joules): a tool pressed into a yielding
+// floor has it to give back, and the floor pushes the tool out, away from a haptic tool still
+// deeper, as the hand draws back.
 //
 // The force-continuity box: with the haptic tool moving dh this tick, a translation x changes the
 // offset graphic - haptic by x - dh; holding each |x_j - dh_j| <= |dh_j| + c with c = margin/sqrt(3)
@@ -1582,10 +1588,10 @@ void from_frame(const Mat3& R0, const double y[6], double x[6]) {
 // x = 0 (staying) is always inside.
 void local_box(const RendererSettings& S, double tool_radius, const double target[6], const Vec3& haptic_motion,
                const Vec3& haptic_rotation, const Vec3& moved, const Vec3& turned, bool limit_rate,
-               double recover_m, double lower[6], double upper[6]) {
+               double recover_m, double spring_energy_J, double lower[6], double upper[6]) {
     const double haptic_turn = glm::length(haptic_rotation);
     const HapticSettings& h = S.haptic;
-    double e0 = 0.0;
+    double e0 = spring_energy_J * h.weight_translational / h.stiffness_N_per_m;
     for (int j = 0; j < 6; ++j) e0 += 0.5 * (j < 3 ? h.weight_translational : h.weight_rotational) * target[j] * target[j];
     for (int j = 0; j < 6; ++j) {
         const double t = target[j];
@@ -2090,7 +2096,10 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             r.ok = true;
             for (int j = 0; j < 6; ++j) r.x[j] = x[j];
             r.energy = energy_of(h, x, target);
-            for (int v = qp::kPoseVars; v < vars; ++v) r.energy += 0.5 * P.weight[v] * x[v] * x[v];
+            double springs = 0.0;
+            for (int v = qp::kPoseVars; v < vars; ++v) springs += 0.5 * P.weight[v] * x[v] * x[v];
+            r.energy += springs;
+            r.spring_energy_J = springs / spring_scale;
             r.error = worst;
             r.atom_count = w.cand_count;
             r.from_start = linearized_at_start;
@@ -2176,6 +2185,7 @@ void keep_candidate(const Model& model, const CandidateResult& cr, Workspace& w,
     stats.constraint_error_m = cr.error;
     w.best_box_held = cr.box_held;
     w.best_energy = cr.energy;
+    w.best_spring_energy_J = cr.spring_energy_J;
     w.best_count = w.cand_count;
     std::copy(w.cand, w.cand + w.cand_count, w.best);
     std::copy(w.cand_slot, w.cand_slot + w.cand_count, w.best_slot);
@@ -2495,7 +2505,7 @@ bool apply_friction(const Model& model, const State& state, const Pose& base, co
     to_frame(frame, target, target_local);
     const double radius = std::max(model.tool.radius_m, 1e-6);
     local_box(model.settings, radius, target_local, motion_local[0], motion_local[1], motion_local[2],
-              motion_local[3], true, 0.0, lower, upper);
+              motion_local[3], true, 0.0, w.base_spring_energy_J, lower, upper);
     w.cand_count = w.best_count;
     std::copy(w.best, w.best + w.best_count, w.cand);
     std::copy(w.best_key, w.best_key + w.best_count, w.cand_key);
@@ -2504,6 +2514,7 @@ bool apply_friction(const Model& model, const State& state, const Pose& base, co
     ++stats.candidates;
     if (!cr.ok) return false;
     for (int j = 0; j < 6; ++j) x_sol[j] = cr.x[j];
+    w.best_spring_energy_J = cr.spring_energy_J;
     w.best_count = w.cand_count;
     std::copy(w.cand, w.cand + w.cand_count, w.best);
     std::copy(w.cand_slot, w.cand_slot + w.cand_count, w.best_slot);
@@ -2737,6 +2748,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     Vec3 moved(0.0);   // translation of earlier passes of this tick
     Vec3 turned(0.0);  // their rotation (sum of rotation vectors: a first-order account)
     w.soft = state.soft;
+    w.base_spring_energy_J = state.spring_energy_J;
 
     double scale = 1.0;
     double xh[6], target[6], target_local[6], lower[6], upper[6];
@@ -2776,6 +2788,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             base.position = at.p;
             base.orientation = at.q;
             w.soft = best_soft_depths(w);
+            w.base_spring_energy_J = w.best_spring_energy_J;
             solved = false;
             scale = 1.0;
         }
@@ -2804,9 +2817,9 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             // The box of the step, and its force-continuity narrowing (used while in contact).
             double rate_lower[6], rate_upper[6];
             local_box(S, radius, target_local, motion_local, rotation_local, moved_local, turned_local, false, 0.0,
-                      lower, upper);
+                      w.base_spring_energy_J, lower, upper);
             local_box(S, radius, target_local, motion_local, rotation_local, moved_local, turned_local, true, 0.0,
-                      rate_lower, rate_upper);
+                      w.base_spring_energy_J, rate_lower, rate_upper);
             // Free motion (first pass only): the straight motion to the haptic pose, clear all
             // the way (CCD).
             if (pass == 0) {
@@ -2860,7 +2873,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             for (int round = 0; round < 2 && !solved; ++round) {
                 const double recover = round == 0 ? 0.0 : 10.0 * S.constraint_tol_m;
                 local_box(S, radius, target_local, motion_local, rotation_local, moved_local, turned_local, true,
-                          recover, rate_lower, rate_upper);
+                          recover, w.base_spring_energy_J, rate_lower, rate_upper);
                 solved = solve_candidates(model, base, frame, target, target_local, rate_lower, rate_upper, reach, state,
                                           w, res.stats, x_sol);
             }
@@ -2915,7 +2928,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                 for (int round = 0; round < 2 && !solved; ++round) {
                     const double recover = round == 0 ? 0.0 : 10.0 * S.constraint_tol_m;
                     local_box(S, radius, target_local, motion_local, rotation_local, moved_local, turned_local, false,
-                              recover, lower, upper);
+                              recover, w.base_spring_energy_J, lower, upper);
                     solved = solve_candidates(model, base, frame, target, target_local, lower, upper, reach, state, w,
                                               res.stats, x_sol);
                 }
@@ -3022,7 +3035,10 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     state.last_haptic = haptic;
     // A held tick keeps the last pose, and with it how deep it is in a compliant zone.
     // The base (an earlier pass's answer) stands where the last pass found nothing better.
-    if (solved) state.soft = res.contacts == 0 ? SoftDepths{} : base_stands ? w.soft : best_soft_depths(w);
+    if (solved) {
+        state.soft = res.contacts == 0 ? SoftDepths{} : base_stands ? w.soft : best_soft_depths(w);
+        state.spring_energy_J = res.contacts == 0 ? 0.0 : base_stands ? w.base_spring_energy_J : w.best_spring_energy_J;
+    }
     state.sliding = res.contacts > 0 && sliding;
     ++state.ticks;
     cache.session = state.session;

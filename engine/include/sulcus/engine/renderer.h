@@ -397,6 +397,7 @@ struct State {
     Atom active[kMaxActiveAtoms];
     Pose last_haptic;
     SoftDepths soft;            // how deep the tool is in each compliant object at the last tick's solution
+    double spring_energy_J = 0.0;  // the energy of the compliant zones' springs there (J)
     bool sliding = false;       // friction: the tool slid (kinetic) at the last tick
     // The (triangle, tool piece) pairs whose separating planes held the tool at the last tick's
     // answer (RendererSettings::carry_planes), each as (object << 40 | triangle << 8 | piece) + 1.
