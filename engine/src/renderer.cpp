@@ -1575,7 +1575,7 @@ void from_frame(const Mat3& R0, const double y[6], double x[6]) {
 
 // The local-solution box of eq. 5 about the pass's base (x = 0). The paper's box holds each
 // coordinate between 0 and the haptic pose's; TowardHaptic keeps only the side that stops a
-// coordinate moving away from the haptic pose. Each adds, and the default (None) is only, the
+// coordinate moving away from the haptic pose and adds, as the default (None) has alone, the
 // bound every solution meets anyway, so that the reach of the step stays finite: its energy is at
 // most that of x = 0 with the compliant zones as deep as at the base, which is feasible. That
 // energy counts the zones' springs (`spring_energy_J`, joules): a tool pressed into a yielding
