@@ -255,7 +255,6 @@ struct Workspace {
     bool best_box_held = false;  // a bound of the box holds the chosen candidate's answer
     double best_energy = 0.0;    // the chosen candidate's energy (eq. 3, with its springs')
     double best_spring_energy_J = 0.0;  // the springs' share of it, in joules
-    double base_spring_energy_J = 0.0;  // the springs' energy at the pass's base (J)
     // Compliance of the candidate being solved and of the best one: each atom's slack zone
     // (-1: rigid) and the zones' slacks.
     int8_t cand_slot[kMaxAtoms];
@@ -267,8 +266,8 @@ struct Workspace {
     int order_index[kMaxAtoms];
     Slacks slacks;
     int8_t best_slot[kMaxAtoms];
-    // How deep the tool is in each compliant object at the base of the pass: the state's at the
-    // first, the earlier pass's answer's after.
+    // How deep the tool is in each compliant object at the base of the pass, and its springs'
+    // energy: the state's at the first, the earlier pass's answer's after.
     SoftDepths soft;
     Slacks best_slacks;
     FrictionContacts friction, best_friction;
@@ -1578,7 +1577,7 @@ void from_frame(const Mat3& R0, const double y[6], double x[6]) {
 // coordinate moving away from the haptic pose and adds, as the default (None) has alone, the
 // bound every solution meets anyway, so that the reach of the step stays finite: its energy is at
 // most that of x = 0 with the compliant zones as deep as at the base, which is feasible. That
-// energy counts the zones' springs (`spring_energy_J`, joules): a tool pressed into a yielding
+// energy counts the zones' springs (SoftDepths::spring_energy_J): a tool pressed into a yielding
 // floor has it to give back, and the floor pushes the tool out, away from a haptic tool still
 // deeper, as the hand draws back.
 //
@@ -1732,11 +1731,12 @@ double slot_depth(const Slacks& sl, int slot, const double* x) {
     return d;
 }
 
-// How deep the chosen candidate's solution is in each compliant object.
+// How deep the chosen candidate's solution is in each compliant object, and its springs' energy.
 SoftDepths best_soft_depths(const Workspace& w) {
     SoftDepths s;
     for (int i = 0; i < w.best_count; ++i)
         if (w.best_slot[i] >= 0) s.add(w.best[i].object, w.best_slacks.depth[w.best_slot[i]]);
+    s.spring_energy_J = w.best_spring_energy_J;
     return s;
 }
 
@@ -2505,7 +2505,7 @@ bool apply_friction(const Model& model, const State& state, const Pose& base, co
     to_frame(frame, target, target_local);
     const double radius = std::max(model.tool.radius_m, 1e-6);
     local_box(model.settings, radius, target_local, motion_local[0], motion_local[1], motion_local[2],
-              motion_local[3], true, 0.0, w.base_spring_energy_J, lower, upper);
+              motion_local[3], true, 0.0, w.soft.spring_energy_J, lower, upper);
     w.cand_count = w.best_count;
     std::copy(w.best, w.best + w.best_count, w.cand);
     std::copy(w.best_key, w.best_key + w.best_count, w.cand_key);
@@ -2748,7 +2748,6 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     Vec3 moved(0.0);   // translation of earlier passes of this tick
     Vec3 turned(0.0);  // their rotation (sum of rotation vectors: a first-order account)
     w.soft = state.soft;
-    w.base_spring_energy_J = state.spring_energy_J;
 
     double scale = 1.0;
     double xh[6], target[6], target_local[6], lower[6], upper[6];
@@ -2788,7 +2787,6 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             base.position = at.p;
             base.orientation = at.q;
             w.soft = best_soft_depths(w);
-            w.base_spring_energy_J = w.best_spring_energy_J;
             solved = false;
             scale = 1.0;
         }
@@ -2817,9 +2815,9 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             // The box of the step, and its force-continuity narrowing (used while in contact).
             double rate_lower[6], rate_upper[6];
             local_box(S, radius, target_local, motion_local, rotation_local, moved_local, turned_local, false, 0.0,
-                      w.base_spring_energy_J, lower, upper);
+                      w.soft.spring_energy_J, lower, upper);
             local_box(S, radius, target_local, motion_local, rotation_local, moved_local, turned_local, true, 0.0,
-                      w.base_spring_energy_J, rate_lower, rate_upper);
+                      w.soft.spring_energy_J, rate_lower, rate_upper);
             // Free motion (first pass only): the straight motion to the haptic pose, clear all
             // the way (CCD).
             if (pass == 0) {
@@ -2873,7 +2871,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             for (int round = 0; round < 2 && !solved; ++round) {
                 const double recover = round == 0 ? 0.0 : 10.0 * S.constraint_tol_m;
                 local_box(S, radius, target_local, motion_local, rotation_local, moved_local, turned_local, true,
-                          recover, w.base_spring_energy_J, rate_lower, rate_upper);
+                          recover, w.soft.spring_energy_J, rate_lower, rate_upper);
                 solved = solve_candidates(model, base, frame, target, target_local, rate_lower, rate_upper, reach, state,
                                           w, res.stats, x_sol);
             }
@@ -2928,7 +2926,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                 for (int round = 0; round < 2 && !solved; ++round) {
                     const double recover = round == 0 ? 0.0 : 10.0 * S.constraint_tol_m;
                     local_box(S, radius, target_local, motion_local, rotation_local, moved_local, turned_local, false,
-                              recover, w.base_spring_energy_J, lower, upper);
+                              recover, w.soft.spring_energy_J, lower, upper);
                     solved = solve_candidates(model, base, frame, target, target_local, lower, upper, reach, state, w,
                                               res.stats, x_sol);
                 }
@@ -3035,10 +3033,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     state.last_haptic = haptic;
     // A held tick keeps the last pose, and with it how deep it is in a compliant zone.
     // The base (an earlier pass's answer) stands where the last pass found nothing better.
-    if (solved) {
-        state.soft = res.contacts == 0 ? SoftDepths{} : base_stands ? w.soft : best_soft_depths(w);
-        state.spring_energy_J = res.contacts == 0 ? 0.0 : base_stands ? w.base_spring_energy_J : w.best_spring_energy_J;
-    }
+    if (solved) state.soft = res.contacts == 0 ? SoftDepths{} : base_stands ? w.soft : best_soft_depths(w);
     state.sliding = res.contacts > 0 && sliding;
     ++state.ticks;
     cache.session = state.session;

@@ -363,13 +363,15 @@ struct StepResult {
 
 // How deep the tool is in each compliant object it has entered (m): per object, its deepest zone
 // giving way at a solution. An object not listed is not entered. At most one entry per slack
-// variable of the QP, so a solution's objects always fit.
+// variable of the QP, so a solution's objects always fit. With the energy the zones' springs hold
+// there, which the next step's box counts (a floor pressed in gives it back as the hand draws back).
 inline constexpr int kMaxSoftObjects = qp::kMaxVars - qp::kPoseVars;
 
 struct SoftDepths {
     int count = 0;
     uint16_t object[kMaxSoftObjects] = {};
     double depth_m[kMaxSoftObjects] = {};
+    double spring_energy_J = 0.0;
 
     double of(uint16_t o) const {
         for (int i = 0; i < count; ++i)
@@ -397,7 +399,6 @@ struct State {
     Atom active[kMaxActiveAtoms];
     Pose last_haptic;
     SoftDepths soft;            // how deep the tool is in each compliant object at the last tick's solution
-    double spring_energy_J = 0.0;  // the energy of the compliant zones' springs there (J)
     bool sliding = false;       // friction: the tool slid (kinetic) at the last tick
     // The (triangle, tool piece) pairs whose separating planes held the tool at the last tick's
     // answer (RendererSettings::carry_planes), each as (object << 40 | triangle << 8 | piece) + 1.
