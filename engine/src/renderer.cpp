@@ -297,17 +297,24 @@ struct Workspace {
     // none), for a model (Model::serial): the box of the edge that gather queries lies inside it
     // while the tool moves less than the room it was widened by, and those hits then hold every
     // one of its own query's. Kept along a session and across sessions, as they depend on the
-    // geometry only.
-    static constexpr int kEdgeMemoHits = 24;
+    // geometry only. A key sits in its hash slot or the one beside it (slot ^ 1): of a pair of
+    // edges in the tissue that share a slot, neither pushes the other out at every tick, as
+    // they did in a table of one slot a key and a quarter the size.
+    static constexpr int kEdgeMemoHits = 40;
     struct EdgeHitMemo {
         uint64_t key = 0;
         uint64_t model = 0;
+        uint64_t used = 0;  // edge_memo_clock at the last use
         Aabb box;
         int count = 0;
         uint16_t hits[kEdgeMemoHits];
     };
-    static constexpr int kEdgeMemoBits = 10;
+    static constexpr int kEdgeMemoBits = 12;
     EdgeHitMemo edge_memo[1 << kEdgeMemoBits];
+    uint64_t edge_memo_clock = 0;  // counts gather_atoms' calls
+    // The most room a memo's box is widened by (m): in the tissue, where an edge's reach is the
+    // tool's depth in it, a box widened by all of that holds more hits than a memo keeps.
+    static constexpr double kEdgeMemoRoom = 1e-4;
     // The faces of a piece that an object vertex could be most in front of, or within the tie
     // tolerance of it, while it stays within `room` of where they were found (`at`, m, in the
     // piece's frame): those within twice the room and the tie tolerance of the most there; or
@@ -1408,6 +1415,7 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
 
     // Tool edges against convex object edges (E-E, Type 2) on the dynamic plane of eq. 7.
     w.oedge_count = sort_unique(w.oedges, w.feature_scratch, w.oedge_count, w.feature_table);
+    ++w.edge_memo_clock;
     for (int i = 0; i < w.oedge_count; ++i) {
         const ModelObject& obj = model.objects[feature_object(w.oedges[i])];
         const MeshEdge& e = obj.topology.edges[feature_id(w.oedges[i])];
@@ -1424,30 +1432,39 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         const double far = reach_of(feature_object(w.oedges[i]));
         local.inflate(far + 1e-12);
         // With the near cache (RendererSettings::near_cache), from the memo while its box holds
-        // this one; else queried in a box with room for the tool to move by `far` more, and
-        // kept. A hit of the wider box that this one's query would not have made is further than
-        // `far` from the edge, which the tests below find.
+        // this one; else queried in a box with room for the tool to move by `far` more (at most
+        // Workspace::kEdgeMemoRoom), and kept where the memo has room for its hits. A hit of the
+        // wider box that this one's query would not have made is further than `far` from the
+        // edge, which the tests below find.
         int hits = 0;
         const bool memo_on = model.settings.near_cache;
         const uint64_t memo_key = w.oedges[i] + 1;
-        Workspace::EdgeHitMemo& memo = w.edge_memo[hash_slot(memo_key, Workspace::kEdgeMemoBits)];
-        if (memo_on && memo.key == memo_key && memo.model == model.serial && memo.box.contains(local)) {
-            for (int h = 0; h < memo.count; ++h) w.edge_hits[hits++] = piece.edge_begin + memo.hits[h];
+        // Two slots the key may sit in: a pair of edges that share one does not push each other
+        // out tick after tick.
+        const uint32_t slot = hash_slot(memo_key, Workspace::kEdgeMemoBits);
+        Workspace::EdgeHitMemo* const pair[2] = {&w.edge_memo[slot], &w.edge_memo[slot ^ 1u]};
+        auto owns = [&](const Workspace::EdgeHitMemo* m) { return m->key == memo_key && m->model == model.serial; };
+        Workspace::EdgeHitMemo* memo = !memo_on ? nullptr : owns(pair[0]) ? pair[0] : owns(pair[1]) ? pair[1] : nullptr;
+        if (memo && memo->box.contains(local)) {
+            memo->used = w.edge_memo_clock;
+            for (int h = 0; h < memo->count; ++h) w.edge_hits[hits++] = piece.edge_begin + memo->hits[h];
         } else {
             Aabb box = local;
-            if (memo_on) box.inflate(far);
+            if (memo_on) box.inflate(std::min(far, Workspace::kEdgeMemoRoom));
             piece.edge_bvh.query(box, [&](uint32_t e) {
                 w.edge_hits[hits++] = piece.edge_begin + e;
                 return true;
             });
             std::sort(w.edge_hits, w.edge_hits + hits);
-            if (memo_on) {
-                memo.key = hits <= Workspace::kEdgeMemoHits ? memo_key : 0;
-                memo.model = model.serial;
-                memo.box = box;
-                memo.count = hits;
-                if (memo.key != 0)
-                    for (int h = 0; h < hits; ++h) memo.hits[h] = uint16_t(w.edge_hits[h] - piece.edge_begin);
+            if (memo_on && hits <= Workspace::kEdgeMemoHits) {
+                // Its own slot again, else the one used longer ago.
+                if (!memo) memo = pair[0]->used <= pair[1]->used ? pair[0] : pair[1];
+                memo->key = memo_key;
+                memo->model = model.serial;
+                memo->used = w.edge_memo_clock;
+                memo->box = box;
+                memo->count = hits;
+                for (int h = 0; h < hits; ++h) memo->hits[h] = uint16_t(w.edge_hits[h] - piece.edge_begin);
             }
         }
         // A segment is no closer to the tool edge than the distance from its midpoint less its
