@@ -1274,8 +1274,8 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         // by one face: the one facing the way the object pushes back (the force of the last
         // tick), so that a face it happens to be near -- the far side of a corner, an inner face
         // against a neighbouring object -- does not hold it; without a force, the nearest.
-        // In key order: placed by tool vertex (a count per vertex), then each vertex's few
-        // entries sorted in place.
+        // Placed by tool vertex (a count per vertex), then each vertex's entries by object, in
+        // place (mostly one object: a pass that moves nothing).
         const int nv = int(tool.mesh.vertices.size());
         std::fill(w.inside_first, w.inside_first + nv + 1, 0);
         for (int i = 0; i < w.inside_count; ++i) ++w.inside_first[w.inside[i].key.a + 1];
@@ -1286,7 +1286,8 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         w.inside_first[0] = 0;
         for (int a = 0; a < nv; ++a)
             for (int i = w.inside_first[a] + 1; i < w.inside_first[a + 1]; ++i)
-                for (int k = i; k > w.inside_first[a] && in[k].key < in[k - 1].key; --k) std::swap(in[k], in[k - 1]);
+                for (int k = i; k > w.inside_first[a] && in[k].key.object < in[k - 1].key.object; --k)
+                    std::swap(in[k], in[k - 1]);
         const bool pushed = glm::dot(push, push) > 0.0;
         int i = 0;
         while (i < w.inside_count) {
@@ -1307,9 +1308,13 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
                         best = k;
                         continue;
                     }
+                    // The most facing the push, then the highest; of equals, the first in key
+                    // order.
                     const Inside& b = in[best];
-                    const bool better = pushed && c.facing != b.facing ? c.facing > b.facing : c.plane > b.plane;
-                    if (better) best = k;
+                    const bool by_facing = pushed && c.facing != b.facing;
+                    const bool better = by_facing ? c.facing > b.facing : c.plane > b.plane;
+                    const bool worse = by_facing ? c.facing < b.facing : c.plane < b.plane;
+                    if (better || (!worse && c.key < b.key)) best = k;
                 }
                 if (best >= 0 && w.feat_count < kMaxFeatures) w.feats[w.feat_count++] = in[best].key;
                 else if (best >= 0) w.gather_full = true;
