@@ -162,16 +162,21 @@ inline double triangle_drop_along(const Vec3& g, const TriangleSphere& ts, const
 // room for rounding: the distance from the axis is a convex function, so over the triangle it is no
 // less than its tangent plane at the centre, whose least is at a vertex. For a small triangle
 // beside the capsule, within a few nanometres of their distance.
-inline double capsule_tangent_lower(const Vec3& p0, const Vec3& p1, double r, const TriangleSphere& ts, const Vec3& a,
-                                    const Vec3& b, const Vec3& e) {
+// With p0_norm = |p0|, which a caller bounding many triangles by one capsule finds once.
+inline double capsule_tangent_lower(const Vec3& p0, double p0_norm, const Vec3& p1, double r, const TriangleSphere& ts,
+                                    const Vec3& a, const Vec3& b, const Vec3& e) {
     const Vec3 d = p1 - p0, off = ts.centre - p0;
     const double dd = glm::dot(d, d);
     const double s = dd > 0.0 ? std::clamp(glm::dot(off, d) / dd, 0.0, 1.0) : 0.0;
     const Vec3 q = off - s * d;
     const double f = glm::length(q);
     if (!(f > 0.0)) return f - ts.radius - r;
-    const double room = 1e-9 + 1e-12 * (glm::length(ts.centre) + glm::length(p0) + f + ts.radius);
+    const double room = 1e-9 + 1e-12 * (ts.centre_norm_m + p0_norm + f + ts.radius);
     return f + triangle_drop_along(q / f, ts, a, b, e) - r - room;
+}
+inline double capsule_tangent_lower(const Vec3& p0, const Vec3& p1, double r, const TriangleSphere& ts, const Vec3& a,
+                                    const Vec3& b, const Vec3& e) {
+    return capsule_tangent_lower(p0, glm::length(p0), p1, r, ts, a, b, e);
 }
 
 // The same for the tapered capsule round axis p0-p1: the hull of the balls of radii r0 at p0 and

@@ -374,11 +374,14 @@ struct CapsuleLine {
     Vec3 chain{0.0};             // from the chain's first point to its last
     double length = 0.0;         // its length
     double stretch = 0.0;        // each capsule's share of it
+    double axis_norm[kToolCapsules + 1] = {};  // each point's distance from the origin (m)
 };
 CapsuleLine capsule_line(const ToolPiece& piece, const Vec3* axis) {
     const Vec3 chain = axis[piece.capsule_count] - axis[0];
     const double length = glm::length(chain);
-    return {axis, chain, length, length / piece.capsule_count};
+    CapsuleLine line{axis, chain, length, length / piece.capsule_count};
+    for (int j = 0; j <= piece.capsule_count; ++j) line.axis_norm[j] = glm::length(axis[j]);
+    return line;
 }
 
 // The least over the piece's capsules of capsule(j) for a triangle of bounding sphere ts, where
@@ -435,8 +438,8 @@ double piece_compliant_bound(const ToolPiece& piece, const CapsuleLine& line, co
     const double apart = least_over_capsules(
         piece, line, ts,
         [&](int j) {
-            return capsule_tangent_lower(line.axis[j], line.axis[j + 1], piece.capsule_radii_m[size_t(j)], ts, a, b,
-                                         e);
+            return capsule_tangent_lower(line.axis[j], line.axis_norm[j], line.axis[j + 1],
+                                         piece.capsule_radii_m[size_t(j)], ts, a, b, e);
         },
         nearest);
     if (apart > 0.0) return apart;
@@ -1158,7 +1161,17 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
     const SoftDepths& soft = w.soft;
     // World to the tool's frame (rotation part), for the E-E boxes.
     const Mat3 to_tool = glm::mat3_cast(glm::conjugate(base.orientation));
-    auto in_of = [&](uint16_t o) { return model.objects[o].compliant ? soft.of(o) + reach : 0.0; };
+    // How far inside object o a feature may be (the last object's kept: features come grouped
+    // by object).
+    int in_object = -1;
+    double in_depth = 0.0;
+    auto in_of = [&](uint16_t o) {
+        if (o != in_object) {
+            in_object = o;
+            in_depth = model.objects[o].compliant ? soft.of(o) + reach : 0.0;
+        }
+        return in_depth;
+    };
     auto back_of = [&](uint16_t o) { return kBackFace + in_of(o); };
     auto reach_of = [&](uint16_t o) { return reach + in_of(o); };
     // Whether a constraint normal points within 60 degrees of the push (true without a push).

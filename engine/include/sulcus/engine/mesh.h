@@ -35,16 +35,18 @@ struct MeshEdge {
     double dihedral = 0.0;         // signed bend angle in radians: > 0 convex, < 0 concave, 0 flat
 };
 
-// A sphere round a triangle: centred on its centroid, through its furthest vertex (m).
+// A sphere round a triangle: centred on its centroid, through its furthest vertex (m), and the
+// centre's distance from the origin (m; what the distance bounds' room for rounding scales with).
 struct TriangleSphere {
     Vec3 centre;
     double radius;
+    double centre_norm_m;
 };
 inline TriangleSphere triangle_sphere(const Vec3& a, const Vec3& b, const Vec3& e) {
     const Vec3 centre = (a + b + e) / 3.0;
     const double da = glm::dot(a - centre, a - centre), db = glm::dot(b - centre, b - centre),
                  de = glm::dot(e - centre, e - centre);
-    return {centre, std::sqrt(std::max(std::max(da, db), de))};
+    return {centre, std::sqrt(std::max(std::max(da, db), de)), glm::length(centre)};
 }
 
 // Adjacency derived from a validated TriMesh.
