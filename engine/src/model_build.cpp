@@ -277,6 +277,9 @@ std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
             tool.edges.push_back({e.v[0] + piece.vertex_begin, e.v[1] + piece.vertex_begin});
             tool.piece_edges.push_back({e.v[0], e.v[1]});
             tool.edge_normals.push_back({topo.triangle_normals[e.tri[0]], topo.triangle_normals[e.tri[1]]});
+            const Vec3 from = mesh.vertices[e.v[0]], along = mesh.vertices[e.v[1]] - from;
+            const double length2 = glm::dot(along, along);
+            tool.edge_lines.push_back({from, along, length2 > 0.0 ? 1.0 / length2 : 0.0});
         }
     piece.edge_count = uint32_t(tool.edges.size()) - piece.edge_begin;
     {

@@ -1444,9 +1444,10 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         const ToolPiece& piece = tool.pieces[feature_piece(w.oedges[i])];
         // The tool edges whose boxes come within reach of the object edge's, in the tool's frame
         // (with room for the rounding of the move into it), in their order.
+        const Vec3 l0 = to_tool * (v0 - base.position), l1 = to_tool * (v1 - base.position);
         Aabb local;
-        local.grow(to_tool * (v0 - base.position));
-        local.grow(to_tool * (v1 - base.position));
+        local.grow(l0);
+        local.grow(l1);
         const double far = reach_of(feature_object(w.oedges[i]));
         local.inflate(far + 1e-12);
         // With the near cache (RendererSettings::near_cache), from the memo while its box holds
@@ -1486,19 +1487,24 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             }
         }
         // A segment is no closer to the tool edge than the distance from its midpoint less its
-        // half length: a cheap bound before the exact closest points.
-        const Vec3 mid_o = 0.5 * (v0 + v1);
-        const double near_o = far + 0.5 * glm::length(eo), eo2 = glm::dot(eo, eo);
+        // half length: a cheap bound before the exact closest points, in the tool's frame on the
+        // tool's edges as built (ModelTool::edge_lines), with a picometre over for the rounding
+        // of the move into it.
+        const Vec3 mid_l = 0.5 * (l0 + l1);
+        const double eo2 = glm::dot(eo, eo);
+        const double near_o = far + 0.5 * glm::length(eo) + 1e-12;
         for (int h = 0; h < hits; ++h) {
             const uint32_t te = w.edge_hits[h];
-            const Vec3& a0 = w.tool_world[tool.edges[te][0]];
-            const Vec3& a1 = w.tool_world[tool.edges[te][1]];
-            const Vec3 et = a1 - a0, off = mid_o - a0;
-            const double ee = glm::dot(et, et);
-            const double along = ee > 0.0 ? std::clamp(glm::dot(off, et) / ee, 0.0, 1.0) : 0.0;
-            const Vec3 gap = off - along * et;
+            const ModelTool::EdgeLine& line = tool.edge_lines[te];
+            const Vec3 off = mid_l - line.from;
+            const double along = std::clamp(glm::dot(off, line.along) * line.inv_length2, 0.0, 1.0);
+            const Vec3 gap = off - along * line.along;
             if (glm::dot(gap, gap) > near_o * near_o) continue;
             // Closest points at an end of either edge (most pairs): a vertex's atom, not this one.
+            const Vec3& a0 = w.tool_world[tool.edges[te][0]];
+            const Vec3& a1 = w.tool_world[tool.edges[te][1]];
+            const Vec3 et = a1 - a0;
+            const double ee = glm::dot(et, et);
             double s, t;
             closest_segment_params(et, eo, a0 - v0, ee, eo2, s, t);
             if (s <= 1e-9 || s >= 1.0 - 1e-9 || t <= 1e-9 || t >= 1.0 - 1e-9) continue;

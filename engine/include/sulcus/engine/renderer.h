@@ -204,6 +204,15 @@ struct ModelTool {
     std::vector<std::array<uint32_t, 2>> edges;
     std::vector<std::array<uint32_t, 2>> piece_edges;
     std::vector<std::array<Vec3, 2>> edge_normals;
+    // Each edge as a segment in the local frame: its first vertex, the vector to its second, and
+    // the reciprocal of that vector's squared length (0 for a point). The cheap cull of the tool
+    // edges near an object edge works on them, in the tool's frame.
+    struct EdgeLine {
+        Vec3 from{0.0};
+        Vec3 along{0.0};
+        double inv_length2 = 0.0;
+    };
+    std::vector<EdgeLine> edge_lines;
     // Triangles with indices relative to their piece's first vertex.
     std::vector<std::array<uint32_t, 3>> piece_triangles;
     std::vector<uint8_t> vertex_piece;  // piece of each vertex
