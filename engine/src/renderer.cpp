@@ -2349,8 +2349,9 @@ bool on_contact(const Model& model, const Workspace& w, const Vec3& m, double to
     // on one piece's surface).
     bool on_tool = false;
     for (const ToolPiece& piece : model.tool.pieces) {
+        // The most m is in front of a face; once over tol, m is off this piece's surface.
         double inside = -1e300;
-        for (uint32_t f = piece.face_begin; f < piece.face_begin + piece.face_count; ++f)
+        for (uint32_t f = piece.face_begin; f < piece.face_begin + piece.face_count && inside <= tol; ++f)
             inside = std::max(inside, glm::dot(w.face_n[f], m) - w.face_d[f]);
         if (std::abs(inside) <= tol) {
             on_tool = true;
