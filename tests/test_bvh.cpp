@@ -142,6 +142,60 @@ TEST(Bvh, RandomSoupsMatchBruteForce) {
     }
 }
 
+// A query's slots come in increasing order with their triangles' boxes, and the query of any box
+// inside it is exactly its slots filtered by those boxes, in the same order: what the renderer's
+// sets of compliant triangles kept between ticks stand on.
+TEST(Bvh, QueryOfAnInnerBoxIsTheOuterQuerysSlotsFiltered) {
+    std::mt19937_64 rng(2026);
+    std::uniform_real_distribution<double> shrink(0.0, 0.5);
+    int compared = 0, differing = 0;
+    for (size_t n : {1u, 17u, 1000u, 5000u}) {
+        for (int leaf : {1, 4, 6}) {
+            const TriMesh m = random_soup(n, rng);
+            const Bvh bvh(m, leaf);
+            for (int q = 0; q < 100; ++q) {
+                const Aabb outer = random_query(rng);
+                std::vector<uint32_t> slots;
+                ASSERT_TRUE(bvh.query_slots(outer, [&](uint32_t slot) {
+                    slots.push_back(slot);
+                    return true;
+                }));
+                for (size_t i = 0; i < slots.size(); ++i) {
+                    ASSERT_LT(slots[i], bvh.order().size());
+                    if (i > 0) {
+                        ASSERT_LT(slots[i - 1], slots[i]);
+                    }
+                    const Aabb& box = bvh.slot_box(slots[i]);
+                    const Aabb want = triangle_box(m, bvh.order()[slots[i]]);
+                    ASSERT_EQ(box.lo, want.lo);
+                    ASSERT_EQ(box.hi, want.hi);
+                }
+                // Boxes inside the outer one, some sharing a face with it.
+                for (int k = 0; k < 5; ++k) {
+                    Aabb inner = outer;
+                    const Vec3 e = outer.hi - outer.lo;
+                    for (int a = 0; a < 3; ++a) {
+                        if (k != 0) inner.lo[a] += shrink(rng) * e[a];
+                        if (k != 1) inner.hi[a] -= shrink(rng) * e[a];
+                    }
+                    std::vector<uint32_t> direct, filtered;
+                    bvh.query(inner, [&](uint32_t t) {
+                        direct.push_back(t);
+                        return true;
+                    });
+                    for (uint32_t slot : slots)
+                        if (bvh.slot_box(slot).overlaps(inner)) filtered.push_back(bvh.order()[slot]);
+                    ASSERT_EQ(direct, filtered) << "n " << n << " leaf " << leaf << " query " << q;
+                    ++compared;
+                    differing += direct.size() != slots.size();
+                }
+            }
+        }
+    }
+    // Many inner queries found fewer triangles than the outer one: the filter had work to do.
+    EXPECT_GT(differing, compared / 4);
+}
+
 // A random chain of 1 to max_count capsules in the unit cube: links of up to `step` per axis,
 // radii up to 0.05, and an extra reach up to `extra_max`.
 struct CapsuleChain {

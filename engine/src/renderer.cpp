@@ -315,6 +315,26 @@ struct Workspace {
     // The most room a memo's box is widened by (m): in the tissue, where an edge's reach is the
     // tool's depth in it, a box widened by all of that holds more hits than a memo keeps.
     static constexpr double kEdgeMemoRoom = 1e-4;
+    // The triangles of a compliant object near a piece, kept between ticks (with the near
+    // cache): the slots (Bvh::query_slots) whose boxes overlap `box`, the piece's query box of
+    // some tick widened by kCompliantRoom. While a later query box lies inside it, that query's
+    // triangles are these slots filtered by their boxes, in the same order, without the walk
+    // down the hierarchy. For (object, piece) of a model; kCompliantSets of them, the one used
+    // longest ago replaced.
+    static constexpr int kCompliantSets = 8;
+    static constexpr int kCompliantSetSlots = 4096;
+    static constexpr double kCompliantRoom = 1e-4;
+    struct CompliantSet {
+        uint64_t model = 0;  // 0: empty
+        uint16_t object = 0;
+        uint8_t piece = 0;
+        uint64_t used = 0;
+        Aabb box;
+        int count = 0;
+        uint32_t slots[kCompliantSetSlots];
+    };
+    CompliantSet compliant_sets[kCompliantSets];
+    uint64_t compliant_clock = 0;
     // The faces of a piece that an object vertex could be most in front of, or within the tie
     // tolerance of it, while it stays within `room` of where they were found (`at`, m, in the
     // piece's frame): those within twice the room and the tie tolerance of the most there; or
@@ -700,10 +720,10 @@ bool prior_covers(const Model& model, size_t k, const Pose& at, const Mat3& fram
 // object's for a piece without capsules), each with the capsules' bound (piece_compliant_bound;
 // none without capsules), in the hierarchy's order; with `any_only`, the first. False on overflow.
 // Apart from gather_near, whose walk over the rigid objects' triangles it would otherwise crowd.
-[[gnu::noinline]] bool gather_in_box(const ModelObject& obj, uint16_t ok, const ToolPiece& piece, uint8_t pk,
-                                     const CapsuleLine& line, const Aabb& b, bool any_only, Workspace& w) {
+[[gnu::noinline]] bool gather_in_box(const Model& model, const ModelObject& obj, uint16_t ok, const ToolPiece& piece,
+                                     uint8_t pk, const CapsuleLine& line, const Aabb& b, bool any_only, Workspace& w) {
     bool overflow = false;
-    obj.bvh.query(b, [&](uint32_t tri) {
+    auto visit = [&](uint32_t tri) {
         if (w.near_count >= kMaxNear) {
             overflow = true;
             return false;
@@ -716,7 +736,50 @@ bool prior_covers(const Model& model, size_t k, const Pose& at, const Mat3& fram
                                  : -1e300;
         w.near[w.near_count++] = NearTri{ok, tri, pk, bound};
         return !any_only;
-    });
+    };
+    if (!model.settings.near_cache) {
+        obj.bvh.query(b, visit);
+        return !overflow;
+    }
+    // The set kept for this object and piece, if its box holds this one; else gathered anew, in
+    // the same set or the one used longest ago, unless it would not fit.
+    Workspace::CompliantSet* set = nullptr;
+    for (Workspace::CompliantSet& c : w.compliant_sets)
+        if (c.model == model.serial && c.object == ok && c.piece == pk) {
+            set = &c;
+            break;
+        }
+    if (!set || !set->box.contains(b)) {
+        if (!set) {
+            set = &w.compliant_sets[0];
+            for (Workspace::CompliantSet& c : w.compliant_sets)
+                if (c.used < set->used) set = &c;
+        }
+        Workspace::CompliantSet& c = *set;
+        c.model = model.serial;
+        c.object = ok;
+        c.piece = pk;
+        c.box = b;
+        c.box.inflate(Workspace::kCompliantRoom);
+        c.count = 0;
+        const bool fits = obj.bvh.query_slots(c.box, [&](uint32_t slot) {
+            if (c.count == Workspace::kCompliantSetSlots) return false;
+            c.slots[c.count++] = slot;
+            return true;
+        });
+        if (!fits) {
+            c.model = 0;
+            c.used = 0;
+            obj.bvh.query(b, visit);
+            return !overflow;
+        }
+    }
+    set->used = ++w.compliant_clock;
+    const std::vector<uint32_t>& order = obj.bvh.order();
+    for (int i = 0; i < set->count; ++i) {
+        const uint32_t slot = set->slots[i];
+        if (obj.bvh.slot_box(slot).overlaps(b) && !visit(order[slot])) break;
+    }
     return !overflow;
 }
 
@@ -794,7 +857,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                 // Most objects are nowhere near the piece: their hierarchy's root says so here.
                 const auto& nodes = obj.bvh.nodes();
                 if (nodes.empty() || !nodes[0].box.overlaps(b)) continue;
-                overflow = !gather_in_box(obj, ok, piece, pk, line, b, any_only, w);
+                overflow = !gather_in_box(model, obj, ok, piece, pk, line, b, any_only, w);
                 if (overflow) return false;
                 if (any_only && w.near_count > 0) return true;
                 continue;

@@ -30,6 +30,14 @@ public:
     template <class Visit>
     bool query(const Aabb& query, Visit&& visit) const;
 
+    // The same walk, calling visit(slot) with each triangle's slot: its place in order(), whose
+    // box is slot_box(slot). The slots come in increasing order, and every node's box holds its
+    // triangles' boxes: so the query of a box inside `query` is this one's slots whose boxes
+    // overlap it, in the same order (what a set of triangles kept between queries relies on).
+    template <class Visit>
+    bool query_slots(const Aabb& query, Visit&& visit) const;
+    const Aabb& slot_box(uint32_t slot) const { return boxes_[slot]; }
+
     // Calls visit(triangle_index) for the triangles that may lie within radii[k] + extra of
     // segment points[k]-points[k + 1] for some k < count (a chain of capsules, count <= 16): every
     // such triangle is visited, once (a box is passed over only when its bounding sphere is
@@ -73,6 +81,11 @@ inline bool box_near_segment(const Aabb& b, const Vec3& p0, const Vec3& d, doubl
 
 template <class Visit>
 bool Bvh::query(const Aabb& q, Visit&& visit) const {
+    return query_slots(q, [&](uint32_t slot) { return visit(order_[slot]); });
+}
+
+template <class Visit>
+bool Bvh::query_slots(const Aabb& q, Visit&& visit) const {
     if (nodes_.empty()) return true;
     uint32_t stack[kBvhMaxDepth + 2];
     int top = 0;
@@ -82,7 +95,7 @@ bool Bvh::query(const Aabb& q, Visit&& visit) const {
         if (!n.box.overlaps(q)) continue;
         if (n.count > 0) {
             for (uint32_t i = n.first; i < n.first + n.count; ++i)
-                if (boxes_[i].overlaps(q) && !visit(order_[i])) return false;
+                if (boxes_[i].overlaps(q) && !visit(i)) return false;
         } else {
             stack[top++] = n.first + 1;
             stack[top++] = n.first;
