@@ -2073,6 +2073,9 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         // that bound, less the motion, is within the zone's give, the triangle needs no test; and
         // one clear of the piece by more than the motion needs none either.
         const double shift = glm::length(nx.p - base.position), turn = glm::length(Vec3(x[3], x[4], x[5]));
+        double piece_moved_by[kMaxToolPieces];
+        for (size_t k = 0; k < model.tool.pieces.size(); ++k)
+            piece_moved_by[k] = shift + turn * model.tool.pieces[k].radius_m;
         auto bound_settles = [&](const NearTri& nt, double moved_by, double give) {
             return model.objects[nt.object].compliant && nt.lower_m - moved_by >= -(S.constraint_tol_m + give);
         };
@@ -2090,7 +2093,7 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
                 lines[k] = capsule_line(model.tool.pieces[k], w.capsule + k * (kToolCapsules + 1));
         for (int i = 0; i < w.near_count; ++i) {
             NearTri& nt = w.near[i];
-            const double moved_by = shift + turn * model.tool.pieces[nt.piece].radius_m;
+            const double moved_by = piece_moved_by[nt.piece];
             if (nt.lower_m > moved_by || !std::isnan(nt.separation_m)) continue;
             const double give = triangle_zone_depth(model, w.slacks, nt);
             if (bound_settles(nt, moved_by, give)) continue;
@@ -2155,7 +2158,7 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             moved_placed = true;
         };
         for (int i = 0; i < w.near_count && missed < kMaxMissed; ++i) {
-            const double moved_by = shift + turn * model.tool.pieces[w.near[i].piece].radius_m;
+            const double moved_by = piece_moved_by[w.near[i].piece];
             if (w.near[i].lower_m > moved_by) continue;
             const double give_i = triangle_zone_depth(model, w.slacks, w.near[i]);
             if (bound_settles(w.near[i], moved_by, give_i)) continue;
