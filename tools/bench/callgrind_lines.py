@@ -1,0 +1,118 @@
+#!/usr/bin/env python3
+"""Instructions per source line with inlined code counted where it was inlined.
+
+callgrind_annotate puts an inlined helper's instructions on the helper's own lines (a GLM
+operator, std::clamp, a geometry.h function), so in a step built with -O3 most of a loop's cost
+shows up in headers. This reads a callgrind output written with --dump-instr=yes, asks addr2line
+(-i) for each instruction's chain of inlined frames, and charges the instruction to the innermost
+frame that lies in SOURCE between lines FIRST and LAST: a GLM operator inlined into a lambda of
+that file counts on the lambda's line. Instructions of functions that were not inlined count on
+their own lines, not on their callers'.
+
+    valgrind --tool=callgrind --dump-instr=yes --toggle-collect='sulcus::step(*' \\
+        --callgrind-out-file=cg.out build/bin/sulcus-cli bench quadrant_two_regions --check-every 0
+    tools/bench/callgrind_lines.py cg.out build/bin/sulcus-cli engine/src/renderer.cpp 1 4000 [TOP]
+
+Prints the total and the TOP (default 40) costliest lines.
+"""
+import collections
+import os
+import re
+import subprocess
+import sys
+
+
+def main():
+    if len(sys.argv) < 6:
+        sys.exit(__doc__)
+    out, binary, source, first, last = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4]), int(sys.argv[5])
+    top = int(sys.argv[6]) if len(sys.argv) > 6 else 40
+    target = os.path.basename(binary)
+    source_abs = os.path.abspath(source)
+    cost = collections.Counter()
+    names = {}
+
+    def name(kind, text):
+        m = re.match(r'\((\d+)\)(?: (.*))?', text)
+        if not m:
+            return text
+        if m.group(2):
+            names[(kind, m.group(1))] = m.group(2)
+        return names.get((kind, m.group(1)), '')
+
+    obj = None
+    addr = 0
+    after_calls = False
+    with open(out) as f:
+        for line in f:
+            if line.startswith('ob='):
+                obj = name('ob', line[3:].strip())
+                continue
+            if line.startswith('cob='):
+                name('ob', line[4:].strip())
+                continue
+            if line.startswith(('cfn=', 'cfi=', 'cfl=', 'fn=', 'fl=', 'fi=', 'fe=')):
+                continue
+            if line.startswith('calls='):
+                after_calls = True  # the next cost line is the call's inclusive cost
+                continue
+            if not line or line[0] not in '0123456789+-*':
+                continue
+            parts = line.split()
+            a = parts[0]
+            if a.startswith('0x'):
+                addr = int(a, 16)
+            elif a.startswith('+'):
+                addr += int(a[1:])
+            elif a.startswith('-'):
+                addr -= int(a[1:])
+            if after_calls:
+                after_calls = False
+                continue
+            if obj and os.path.basename(obj) == target and len(parts) >= 3:
+                cost[addr] += int(parts[2])
+    if not cost:
+        sys.exit(f'callgrind_lines.py: {out}: no instructions of {target} (written with --dump-instr=yes?)')
+
+    addresses = sorted(cost)
+    text = subprocess.run(['addr2line', '-a', '-i', '-f', '-C', '-e', binary],
+                          input='\n'.join(hex(a) for a in addresses), capture_output=True, text=True,
+                          check=True).stdout.split('\n')
+    per_line = collections.Counter()
+    current = None
+    frames = []
+
+    def charge():
+        if current is None:
+            return
+        # addr2line lists the innermost frame first.
+        for _function, location in frames:
+            path, _, number = location.rpartition(':')
+            number = number.split()[0] if number else ''
+            if number.isdigit() and os.path.abspath(path) == source_abs and first <= int(number) <= last:
+                per_line[int(number)] += cost[current]
+                return
+
+    i = 0
+    while i < len(text):
+        entry = text[i]
+        if entry.startswith('0x'):
+            charge()
+            current = int(entry, 16)
+            frames = []
+            i += 1
+        elif entry and i + 1 < len(text):
+            frames.append((entry, text[i + 1]))
+            i += 2
+        else:
+            i += 1
+    charge()
+
+    lines = open(source).read().split('\n')
+    print(f'total {sum(per_line.values()) / 1e6:.1f} M instructions on {source} lines {first}-{last}')
+    for number, n in sorted(per_line.items(), key=lambda x: -x[1])[:top]:
+        print(f'{n / 1e6:9.1f} M {number:6} {lines[number - 1].strip()[:100]}')
+
+
+if __name__ == '__main__':
+    main()
