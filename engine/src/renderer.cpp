@@ -408,11 +408,13 @@ CapsuleLine capsule_line(const ToolPiece& piece, const Vec3* axis) {
 // capsule(j) is at least the sphere's bound against capsule j: the capsule the centre projects
 // into first, then only those whose gap along the chain, less the radii, comes under what that
 // one gave (by a nanometre, for rounding). `nearest` receives the capsule that gave it.
-template <class Capsule>
-double least_over_capsules(const ToolPiece& piece, const CapsuleLine& line, const TriangleSphere& ts,
-                           Capsule&& capsule, int& nearest) {
+// With Count > 0 the piece has that many capsules (the loop then unrolls), else
+// piece.capsule_count.
+template <int Count, class Capsule>
+double least_over_capsules_of(const ToolPiece& piece, const CapsuleLine& line, const TriangleSphere& ts,
+                              Capsule&& capsule, int& nearest) {
     const Vec3* axis = line.axis;
-    const int count = piece.capsule_count;
+    const int count = Count > 0 ? Count : piece.capsule_count;
     const double length = line.length, stretch = line.stretch;
     const double along = length > 0.0 ? glm::dot(ts.centre - axis[0], line.chain) / length : 0.0;
     auto gap_bound = [&](int j) {
@@ -432,6 +434,14 @@ double least_over_capsules(const ToolPiece& piece, const CapsuleLine& line, cons
         }
     }
     return bound;
+}
+template <class Capsule>
+double least_over_capsules(const ToolPiece& piece, const CapsuleLine& line, const TriangleSphere& ts,
+                           Capsule&& capsule, int& nearest) {
+    // A long piece has kToolCapsules of them (ToolPiece::capsule_count).
+    if (piece.capsule_count == kToolCapsules)
+        return least_over_capsules_of<kToolCapsules>(piece, line, ts, capsule, nearest);
+    return least_over_capsules_of<0>(piece, line, ts, capsule, nearest);
 }
 
 double piece_capsule_bound(const ToolPiece& piece, const CapsuleLine& line, const Vec3& a, const TriangleSphere& ts,
