@@ -9,7 +9,8 @@ frame that lies in SOURCE between lines FIRST and LAST: a GLM operator inlined i
 that file counts on the lambda's line. Instructions of functions that were not inlined count on
 their own lines, not on their callers'.
 
-    valgrind --tool=callgrind --dump-instr=yes --toggle-collect='sulcus::step(*' \\
+    valgrind --tool=callgrind --dump-instr=yes \\
+        --toggle-collect='sulcus::step(sulcus::Model const&, sulcus::State&, sulcus::Pose const&)' \\
         --callgrind-out-file=cg.out build/bin/sulcus-cli bench quadrant_two_regions --check-every 0
     tools/bench/callgrind_lines.py cg.out build/bin/sulcus-cli engine/src/renderer.cpp 1 4000 [TOP]
 
