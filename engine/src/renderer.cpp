@@ -321,6 +321,13 @@ struct Workspace {
     // triangles are these slots filtered by their boxes, in the same order, without the walk
     // down the hierarchy. For (object, piece) of a model; kCompliantSets of them, the one used
     // longest ago replaced.
+    //
+    // Each slot keeps the capsules' bound on its triangle (piece_compliant_bound) where it was
+    // last measured, as that bound plus the set's `moved` then. `moved` adds up how far the
+    // piece's capsule points have moved at each query since the set was made (from `axis`, where
+    // they were at the last one): no capsule is nearer a triangle now than its bound then less
+    // what `moved` has grown by since. A triangle that this puts beyond what gather looks at is
+    // not measured again (gather_in_box).
     static constexpr int kCompliantSets = 8;
     static constexpr int kCompliantSetSlots = 4096;
     static constexpr double kCompliantRoom = 1e-4;
@@ -332,6 +339,9 @@ struct Workspace {
         Aabb box;
         int count = 0;
         uint32_t slots[kCompliantSetSlots];
+        double kept[kCompliantSetSlots];  // bound + moved when measured (m); -1e300: not measured
+        Vec3 axis[kToolCapsules + 1];     // the capsule points at the last query (world)
+        double moved = 0.0;               // m
     };
     CompliantSet compliant_sets[kCompliantSets];
     uint64_t compliant_clock = 0;
@@ -730,21 +740,31 @@ bool prior_covers(const Model& model, size_t k, const Pose& at, const Mat3& fram
 // object's for a piece without capsules), each with the capsules' bound (piece_compliant_bound;
 // none without capsules), in the hierarchy's order; with `any_only`, the first. False on overflow.
 // Apart from gather_near, whose walk over the rigid objects' triangles it would otherwise crowd.
+//
+// With the near cache, a triangle that its bound where it was last measured, less how far the
+// capsules have moved since (Workspace::CompliantSet), puts further than `beyond` from the piece
+// comes with that lower bound instead of being measured again. `beyond` is the furthest that
+// gather_atoms looks for the piece's features on this object (its `far`), so such a triangle is
+// beyond there as it would be measured; and the step's other uses of the bound are no nearer
+// (the guard: how far the piece moves in the step; CCD: an exact test where the bound leaves
+// room).
 [[gnu::noinline]] bool gather_in_box(const Model& model, const ModelObject& obj, uint16_t ok, const ToolPiece& piece,
-                                     uint8_t pk, const CapsuleLine& line, const Aabb& b, bool any_only, Workspace& w) {
+                                     uint8_t pk, const CapsuleLine& line, const Aabb& b, double beyond, bool any_only,
+                                     Workspace& w) {
     bool overflow = false;
+    auto bound_of = [&](uint32_t tri) {
+        const auto& t = obj.mesh.triangles[tri];
+        return piece.capsule_count > 0
+                   ? piece_compliant_bound(piece, line, obj.topology.triangle_spheres[tri], obj.mesh.vertices[t[0]],
+                                           obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]])
+                   : -1e300;
+    };
     auto visit = [&](uint32_t tri) {
         if (w.near_count >= kMaxNear) {
             overflow = true;
             return false;
         }
-        const auto& t = obj.mesh.triangles[tri];
-        const double bound = piece.capsule_count > 0
-                                 ? piece_compliant_bound(piece, line, obj.topology.triangle_spheres[tri],
-                                                         obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
-                                                         obj.mesh.vertices[t[2]])
-                                 : -1e300;
-        w.near[w.near_count++] = NearTri{ok, tri, pk, bound};
+        w.near[w.near_count++] = NearTri{ok, tri, pk, bound_of(tri)};
         return !any_only;
     };
     if (!model.settings.near_cache) {
@@ -774,6 +794,7 @@ bool prior_covers(const Model& model, size_t k, const Pose& at, const Mat3& fram
         c.count = 0;
         const bool fits = obj.bvh.query_slots(c.box, [&](uint32_t slot) {
             if (c.count == Workspace::kCompliantSetSlots) return false;
+            c.kept[c.count] = -1e300;
             c.slots[c.count++] = slot;
             return true;
         });
@@ -783,12 +804,44 @@ bool prior_covers(const Model& model, size_t k, const Pose& at, const Mat3& fram
             obj.bvh.query(b, visit);
             return !overflow;
         }
+        c.moved = 0.0;
+        if (piece.capsule_count > 0)
+            for (int j = 0; j <= piece.capsule_count; ++j) c.axis[j] = line.axis[j];
     }
-    set->used = ++w.compliant_clock;
+    Workspace::CompliantSet& c = *set;
+    c.used = ++w.compliant_clock;
+    // How far the capsules' points have moved since the last query: no point of a capsule moves
+    // further than its ends (a rigid motion moves the points of a segment by the blend of its
+    // ends' motions).
+    const bool keep = piece.capsule_count > 0;
+    double moved = 0.0;
+    if (keep)
+        for (int j = 0; j <= piece.capsule_count; ++j) {
+            moved = std::max(moved, glm::length(line.axis[j] - c.axis[j]));
+            c.axis[j] = line.axis[j];
+        }
+    c.moved += moved;
+    // A picometre under, for the rounding of the sums.
+    const double since = c.moved + 1e-12;
     const std::vector<uint32_t>& order = obj.bvh.order();
-    for (int i = 0; i < set->count; ++i) {
-        const uint32_t slot = set->slots[i];
-        if (obj.bvh.slot_box(slot).overlaps(b) && !visit(order[slot])) break;
+    for (int i = 0; i < c.count; ++i) {
+        const uint32_t slot = c.slots[i];
+        if (!obj.bvh.slot_box(slot).overlaps(b)) continue;
+        if (w.near_count >= kMaxNear) {
+            overflow = true;
+            break;
+        }
+        const uint32_t tri = order[slot];
+        const double kept = c.kept[i] - since;
+        double bound;
+        if (keep && kept > beyond) {
+            bound = kept;
+        } else {
+            bound = bound_of(tri);
+            c.kept[i] = bound + c.moved;
+        }
+        w.near[w.near_count++] = NearTri{ok, tri, pk, bound};
+        if (any_only) break;
     }
     return !overflow;
 }
@@ -867,7 +920,9 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                 // Most objects are nowhere near the piece: their hierarchy's root says so here.
                 const auto& nodes = obj.bvh.nodes();
                 if (nodes.empty() || !nodes[0].box.overlaps(b)) continue;
-                overflow = !gather_in_box(model, obj, ok, piece, pk, line, b, any_only, w);
+                // How far gather_atoms looks for the piece's features on this object (its `far`).
+                const double beyond = obj.compliant ? reach_all + (w.soft.of(ok) + reach_all) : reach;
+                overflow = !gather_in_box(model, obj, ok, piece, pk, line, b, beyond, any_only, w);
                 if (overflow) return false;
                 if (any_only && w.near_count > 0) return true;
                 continue;
