@@ -2542,10 +2542,13 @@ struct ContactCheck {
 };
 
 // The distance between the features of atom `a` with the tool at `at`: its tool vertex and object
-// triangle, its object vertex and the tool's surface, its two edges. The tool's triangles are
-// searched until one is within `enough` of the object vertex: those on the atom's own face plane
-// first, where the vertex mostly touches (enough < 0: all of them).
-double feature_distance(const Model& model, const Atom& a, const ToolPoseAt& at, double enough) {
+// triangle, its object vertex and the tool's surface, its two edges. For an object vertex the
+// tool's triangles are searched until one's distance `d` satisfies `enough(d)`, which must hold
+// for every distance below one it holds for: the answer then says the same of the least
+// distance. Those on the atom's own face plane are searched first, where the vertex mostly
+// touches.
+template <class Enough>
+double feature_distance(const Model& model, const Atom& a, const ToolPoseAt& at, Enough&& enough) {
     const ModelTool& tool = model.tool;
     const ModelObject& o = model.objects[a.object];
     if (a.kind == AtomKind::VertexFace || a.kind == AtomKind::FixedAxis) {
@@ -2560,14 +2563,17 @@ double feature_distance(const Model& model, const Atom& a, const ToolPoseAt& at,
             return closest_on_triangle(v, tool.mesh.vertices[t[0]], tool.mesh.vertices[t[1]],
                                        tool.mesh.vertices[t[2]]).distance;
         };
-        if (enough >= 0.0) {
-            const Vec3& fn = tool.face_normals[a.tool_face];
-            for (size_t t = 0; t < tool.mesh.triangles.size() && d > enough; ++t)
-                if (glm::dot(tool.topology.triangle_normals[t], fn) > 1.0 - 1e-9)
-                    d = std::min(d, to_triangle(tool.mesh.triangles[t]));
-            if (d <= enough) return d;
+        const Vec3& fn = tool.face_normals[a.tool_face];
+        const size_t n = tool.mesh.triangles.size();
+        for (size_t t = 0; t < n; ++t)
+            if (glm::dot(tool.topology.triangle_normals[t], fn) > 1.0 - 1e-9) {
+                d = std::min(d, to_triangle(tool.mesh.triangles[t]));
+                if (enough(d)) return d;
+            }
+        for (size_t t = 0; t < n; ++t) {
+            d = std::min(d, to_triangle(tool.mesh.triangles[t]));
+            if (enough(d)) return d;
         }
-        for (const auto& t : tool.mesh.triangles) d = std::min(d, to_triangle(t));
         return d;
     }
     const auto& te = tool.edges[a.tool_edge];
@@ -2583,17 +2589,20 @@ bool contact_is_real(const Model& model, const Atom& a, const ToolPoseAt& at, do
     const double tol = model.settings.constraint_tol_m;
     const ModelObject& o = model.objects[a.object];
     // Without give the contact is real when the features are within the tolerance.
-    const double d = feature_distance(model, a, at, give == 0.0 ? 10.0 * tol : -1.0);
     // In a compliant zone the tool is `give` inside the surface it touches. That surface is
     // every face of the zone moved in, not one face's plane, so the contact is real too when
     // the feature is deeper than `give` in the other, or when the tool vertex is within
     // `give` of any face of the object. A separating plane of the guard holds the piece off
     // its triangle: real when the piece meets the triangle, wherever the vertex on the plane
     // is (a long tool's edge laid across the face).
-    bool real = std::abs(d - give) <= 10.0 * tol;
-    if (!real && o.compliant && give > 0.0) {
-        real = d < give;
-        if (!real && (a.kind == AtomKind::VertexFace || a.kind == AtomKind::FixedAxis))
+    const bool deeper_counts = o.compliant && give > 0.0;
+    auto meets = [&](double d) { return std::abs(d - give) <= 10.0 * tol || (deeper_counts && d < give); };
+    // Without give, or where deeper counts, the test holds for every distance below one it holds
+    // for: the search may stop at the first distance it holds for.
+    const bool may_stop = give == 0.0 || deeper_counts;
+    bool real = meets(feature_distance(model, a, at, [&](double d) { return may_stop && meets(d); }));
+    if (!real && deeper_counts) {
+        if (a.kind == AtomKind::VertexFace || a.kind == AtomKind::FixedAxis)
             real = near_surface(o, at.p + at.R * model.tool.mesh.vertices[a.tool_vertex], give + 10.0 * tol);
         if (!real && a.kind == AtomKind::FixedAxis)
             real = piece_meets_triangle(model, a.tool_vertex, o, a.object_triangle, at, give + 10.0 * tol);
@@ -2609,7 +2618,7 @@ bool within_contact_distance(const Model& model, const Workspace& w, const ToolP
     const double within = model.settings.contact_distance_m;
     for (int i = 0; i < w.best_count; ++i)
         if (w.best_key[i] == 0 && !model.objects[w.best[i].object].compliant && best_value(model, w, i, at) <= within &&
-            feature_distance(model, w.best[i], at, within) <= within)
+            feature_distance(model, w.best[i], at, [within](double d) { return d <= within; }) <= within)
             return true;
     return false;
 }
