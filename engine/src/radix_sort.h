@@ -48,9 +48,10 @@ inline uint32_t hash_slot(uint64_t key, int bits) { return uint32_t((key * 0x9E3
 // Slots of an open-addressing table that drops repeats before a sort. Each slot carries the
 // stamp of the call that filled it, so a call never clears the table; a call uses only the
 // first 2^k slots, k just enough for half of them to stay empty, so that a few hundred keys touch
-// a few kilobytes.
+// a few kilobytes. 16,384 slots: the vertices of the 2,300 gingiva triangles round a probe deep
+// in an inflamed floor (some 7,000 keys, a third of them distinct) still go through the table.
 struct DedupeTable {
-    static constexpr int kBits = 12;
+    static constexpr int kBits = 14;
     static constexpr int kSlots = 1 << kBits;
     uint64_t key[kSlots];
     uint32_t stamp[kSlots] = {};

@@ -299,8 +299,11 @@ struct Workspace {
     // one of its own query's. Kept along a session and across sessions, as they depend on the
     // geometry only. A key sits in its hash slot or the one beside it (slot ^ 1): of a pair of
     // edges in the tissue that share a slot, neither pushes the other out at every tick, as
-    // they did in a table of one slot a key and a quarter the size.
-    static constexpr int kEdgeMemoHits = 40;
+    // they did in a table of one slot a key and a quarter the size. Up to 160 hits: a probe
+    // deep in an inflamed floor looks a millimetre round each edge, whose box then holds more
+    // than half the tip's edges (40 hits kept those edges out, and each went to the hierarchy
+    // and a sort at every tick).
+    static constexpr int kEdgeMemoHits = 160;
     struct EdgeHitMemo {
         uint64_t key = 0;
         uint64_t model = 0;
