@@ -739,6 +739,13 @@ bool prior_covers(const Model& model, size_t k, const Pose& at, const Mat3& fram
     return true;
 }
 
+// How far inside object o the step looks for the tool's features (m): for a compliant object the
+// tool's depth in it (`soft`) plus the step's reach, for a rigid one nothing. Gather looks that
+// much further than the reach (gather_atoms' `far`).
+double inside_reach(const Model& model, const SoftDepths& soft, uint16_t o, double reach) {
+    return model.objects[o].compliant ? soft.of(o) + reach : 0.0;
+}
+
 // The triangles of `obj` whose boxes meet box `b`, for piece `pk` (a compliant object's, or any
 // object's for a piece without capsules), each with the capsules' bound (piece_compliant_bound;
 // none without capsules), in the hierarchy's order; with `any_only`, the first. False on overflow.
@@ -762,14 +769,15 @@ bool prior_covers(const Model& model, size_t k, const Pose& at, const Mat3& fram
                                            obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]])
                    : -1e300;
     };
-    auto visit = [&](uint32_t tri) {
+    auto push = [&](uint32_t tri, double bound) {
         if (w.near_count >= kMaxNear) {
             overflow = true;
             return false;
         }
-        w.near[w.near_count++] = NearTri{ok, tri, pk, bound_of(tri)};
+        w.near[w.near_count++] = NearTri{ok, tri, pk, bound};
         return !any_only;
     };
+    auto visit = [&](uint32_t tri) { return push(tri, bound_of(tri)); };
     if (!model.settings.near_cache) {
         obj.bvh.query(b, visit);
         return !overflow;
@@ -830,21 +838,13 @@ bool prior_covers(const Model& model, size_t k, const Pose& at, const Mat3& fram
     for (int i = 0; i < c.count; ++i) {
         const uint32_t slot = c.slots[i];
         if (!obj.bvh.slot_box(slot).overlaps(b)) continue;
-        if (w.near_count >= kMaxNear) {
-            overflow = true;
-            break;
-        }
         const uint32_t tri = order[slot];
-        const double kept = c.kept[i] - since;
-        double bound;
-        if (keep && kept > beyond) {
-            bound = kept;
-        } else {
+        double bound = c.kept[i] - since;
+        if (!keep || !(bound > beyond)) {
             bound = bound_of(tri);
             c.kept[i] = bound + c.moved;
         }
-        w.near[w.near_count++] = NearTri{ok, tri, pk, bound};
-        if (any_only) break;
+        if (!push(tri, bound)) break;
     }
     return !overflow;
 }
@@ -924,7 +924,7 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                 const auto& nodes = obj.bvh.nodes();
                 if (nodes.empty() || !nodes[0].box.overlaps(b)) continue;
                 // How far gather_atoms looks for the piece's features on this object (its `far`).
-                const double beyond = obj.compliant ? reach_all + (w.soft.of(ok) + reach_all) : reach;
+                const double beyond = reach_all + inside_reach(model, w.soft, ok, reach_all);
                 overflow = !gather_in_box(model, obj, ok, piece, pk, line, b, beyond, any_only, w);
                 if (overflow) return false;
                 if (any_only && w.near_count > 0) return true;
@@ -1299,7 +1299,7 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
     auto in_of = [&](uint16_t o) {
         if (o != in_object) {
             in_object = o;
-            in_depth = model.objects[o].compliant ? soft.of(o) + reach : 0.0;
+            in_depth = inside_reach(model, soft, o, reach);
         }
         return in_depth;
     };
