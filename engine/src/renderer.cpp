@@ -132,6 +132,7 @@ struct FeatureKey {
 struct Inside {
     FeatureKey key;
     double plane;
+    double distance;  // from the tool vertex to the triangle
     bool behind;
     double facing;
 };
@@ -264,6 +265,11 @@ struct Workspace {
     uint64_t order_keys[kMaxAtoms];
     double order_value[kMaxAtoms];
     int order_index[kMaxAtoms];
+    // Gather's V-F and separating-plane atoms at the base (cover_zones): their values, zone slots,
+    // and where each moves to when the covered ones drop.
+    double atom_value[kMaxAtoms];
+    int8_t atom_zone_slot[kMaxAtoms];
+    int atom_moved_to[kMaxAtoms];
     Slacks slacks;
     int8_t best_slot[kMaxAtoms];
     // How deep the tool is in each compliant object at the base of the pass, and its springs'
@@ -1281,14 +1287,156 @@ void add_feature_atoms(const Model& model, Workspace& w, const FeatureKey& k, co
     }
 }
 
+// The contact zone of an atom's object feature.
+uint16_t atom_zone(const Model& model, const Atom& a) {
+    const ModelObject& o = model.objects[a.object];
+    if (o.triangle_zone.empty()) return o.zone;
+    switch (a.kind) {
+        case AtomKind::VertexFace:
+        case AtomKind::FixedAxis: return o.triangle_zone[a.object_triangle];
+        case AtomKind::FaceVertex: return o.vertex_zone[a.object_vertex];
+        case AtomKind::EdgeEdge: return o.triangle_zone[o.topology.edges[a.object_edge].tri[0]];
+    }
+    return o.zone;
+}
+
+const ModelMaterial& zone_material(const Model& model, uint16_t zone) {
+    return model.materials[model.zone_material[zone]];
+}
+
+// Atoms of a compliant zone that cannot hold the tool anywhere in the step's box, left out of
+// gather's set. The atoms of a zone share its give s >= 0 (the sum of its springs): each holds
+// when g + c s >= 0, with c = 1 where the zone gives way along its normals and c = n . d >= 0
+// where it translates along d. So atom i cannot hold the tool (it holds, out of contact, wherever
+// the rest do) where over the whole box
+//   - g_i stays above 0 by the contact distance and more: it holds whatever the give; or
+//   - (c = 1) g_i stays above g_j by as much, for an atom j of the same zone in every candidate:
+//     j holding makes i hold.
+// A candidate's solution is the same with and without i. Over the box a tool point at distance
+// rho from the tool's origin moves by at most box.move + box.turn (rho + box.move) (PieceReach,
+// with its room), so that, from the values at the base g0,
+//   - a V-F or separating-plane atom (a plane fixed in the world) stays within that of g0: these
+//     are the covering atoms j (ZoneCover::covered), and are left out themselves by both tests;
+//   - an E-E or F-V atom is n . (P - Q) with P the point of the tool's line or face nearest the
+//     other feature at the base (P - Q = g0 n0) and n the atom's unit normal; as n turns,
+//     n . (P - Q) = g0 (n . n0) is at least -|g0|, so the atom is at least -|g0| less the motion
+//     of P (for E-E, a point of the tool's edge; for F-V the object vertex's foot on the face's
+//     plane, no further from the origin than the vertex is, plus |g0|): only the second test
+//     can leave it out.
+// So deep in a zone, only the atoms about as deep as its deepest V-F atom stay, and outside it
+// those within the reach. An atom that is the default of an alternative stays.
+struct ZoneCover {
+    static constexpr int kZones = 16;
+    int zones = 0;
+    uint16_t zone[kZones];
+    // Per zone, the least bound above of a covering atom's value over the box (m; +inf with none,
+    // and in a zone that gives way along one direction).
+    double covered[kZones];
+    double vertex_motion = 0.0;  // how far a tool vertex moves in the box, at most (m)
+    double margin = 0.0;         // the contact distance and twice the constraint tolerance (m)
+
+    // A value (m) over which a V-F or separating-plane atom of a compliant zone holds over the
+    // whole box, out of contact, whatever the give.
+    static double far_plane(const Model& model, const PieceReach& box) {
+        return box.move + box.turn * (model.tool.radius_m + box.move) + box.contact + box.room +
+               model.settings.contact_distance_m + 2.0 * model.settings.constraint_tol_m;
+    }
+
+    // The value (m) an atom of zone z must stay above over the box to be left out; +inf for a zone
+    // not seen.
+    double limit(uint16_t z) const {
+        for (int k = 0; k < zones; ++k)
+            if (zone[k] == z) return std::min(covered[k], 0.0) + margin;
+        return 1e300;
+    }
+};
+
+// Whether the feature of key k of a compliant object, `distance` (over `far_plane`) from its tool
+// vertex at `wa`, gives the vertex no atom that can hold (add_feature_atoms, ZoneCover): a convex
+// edge (the vertex over a point between its ends) or a convex or mixed vertex gives at most its own
+// plane, whose value is that distance; a concave one gives nothing that far off. Such a feature
+// need not be looked at. A flat edge may give the plane of its faces, which the vertex may be
+// behind.
+bool leaves_out_far_plane(const Model& model, const FeatureKey& k, const Vec3& wa, double distance, double far_plane) {
+    if (!(distance > far_plane) || k.type == 0) return false;
+    const ModelObject& obj = model.objects[k.object];
+    if (k.type == 2) return true;
+    const MeshEdge& e = obj.topology.edges[k.id];
+    if (e.convexity == Convexity::Concave) return true;
+    if (e.convexity != Convexity::Convex) return false;
+    const Vec3& v0 = obj.mesh.vertices[e.v[0]];
+    const Vec3 ev = obj.mesh.vertices[e.v[1]] - v0;
+    const double t = glm::clamp(glm::dot(wa - v0, ev) / glm::dot(ev, ev), 0.0, 1.0);
+    return t > 0.0 && t < 1.0;
+}
+
+// Whether zone z of an object is compliant, and (along_normals) gives way along its normals.
+bool compliant_zone(const Model& model, uint16_t object, uint16_t z, bool along_normals) {
+    if (!model.objects[object].compliant || !zone_material(model, z).compliant) return false;
+    const Vec3& d = model.zone_direction[z];
+    return !along_normals || (d.x == 0.0 && d.y == 0.0 && d.z == 0.0);
+}
+
+// The zones' bounds from gather's V-F and separating-plane atoms (all of them are made before
+// the F-V and E-E atoms); each such atom's zone slot and value at the base stay in the workspace
+// for remove_covered_atoms.
+ZoneCover cover_zones(const Model& model, const Pose& base, const PieceReach& box, Workspace& w) {
+    ZoneCover c;
+    c.margin = model.settings.contact_distance_m + 2.0 * model.settings.constraint_tol_m;
+    c.vertex_motion = box.move + box.turn * (model.tool.radius_m + box.move) + box.contact + box.room;
+    if (!model.any_compliant || !model.settings.drop_covered_atoms) return c;
+    const double x0[6] = {};
+    const ToolPoseAt at = tool_pose_at(base, x0);
+    int8_t* const slot = w.atom_zone_slot;
+    for (int i = 0; i < w.atom_count; ++i) {
+        slot[i] = -1;
+        const Atom& a = w.atoms[i];
+        const uint16_t z = atom_zone(model, a);
+        if (!compliant_zone(model, a.object, z, false)) continue;
+        int k = 0;
+        while (k < c.zones && c.zone[k] != z) ++k;
+        if (k == c.zones) {
+            if (c.zones == ZoneCover::kZones) continue;
+            c.zone[c.zones] = z;
+            c.covered[c.zones++] = 1e300;
+        }
+        slot[i] = int8_t(k);
+        w.atom_value[i] = evaluate_atom(model, a, at, nullptr);
+    }
+    for (int k = 0; k < w.alt_count; ++k) slot[w.alts[k].replace] = -1;
+    for (int i = 0; i < w.atom_count; ++i)
+        if (slot[i] >= 0 && compliant_zone(model, w.atoms[i].object, c.zone[slot[i]], true))
+            c.covered[slot[i]] = std::min(c.covered[slot[i]], w.atom_value[i] + c.vertex_motion);
+    return c;
+}
+
+// Drops those of the first `count` atoms (the ones cover_zones saw) that cannot hold the tool,
+// keeping the order.
+void remove_covered_atoms(const ZoneCover& c, int count, Workspace& w) {
+    if (c.zones == 0) return;
+    int kept = 0;
+    for (int i = 0; i < w.atom_count; ++i) {
+        const int k = i < count ? w.atom_zone_slot[i] : -1;
+        const bool drop = k >= 0 && w.atom_value[i] - c.vertex_motion > std::min(c.covered[k], 0.0) + c.margin;
+        w.atom_moved_to[i] = drop ? -1 : kept;
+        if (!drop) w.atoms[kept++] = w.atoms[i];
+    }
+    if (kept == w.atom_count) return;
+    for (int k = 0; k < w.alt_count; ++k) w.alts[k].replace = w.atom_moved_to[w.alts[k].replace];
+    w.atom_count = kept;
+}
+
 // gather: the principal-contact atoms of every feature pair within `reach`. The tool may be inside
 // a compliant object by as deep as it is at the base (Workspace::soft) plus the reach: that
 // object's features stay in play that far behind their surface. False when a tool vertex's
 // feature or an atom did not fit (deep in a compliant object): those are left out, and the
 // guard holds the tool off whatever they would have held (StepStats::gather_truncated). A
 // smaller box does not help there: the depth, not the motion, makes the set.
-bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3& push, Workspace& w) {
+bool gather_atoms(const Model& model, const Pose& base, const double lower[6], const double upper[6], const Vec3& push,
+                  Workspace& w) {
     const ModelTool& tool = model.tool;
+    const PieceReach box = piece_reach(model.settings, tool.radius_m, base.position, lower, upper);
+    const double reach = box.reach;
     const SoftDepths& soft = w.soft;
     // World to the tool's frame (rotation part), for the E-E boxes.
     const Mat3 to_tool = glm::mat3_cast(glm::conjugate(base.orientation));
@@ -1400,7 +1548,7 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
                 // Sorted out below: the tool may be inside a compliant object.
                 if (w.inside_count < kMaxFeatures)
                     w.inside[w.inside_count++] =
-                        Inside{key, plane, c.region == TriRegion::Face && plane < -kBackFace, glm::dot(n, push)};
+                        Inside{key, plane, c.distance, c.region == TriRegion::Face && plane < -kBackFace, glm::dot(n, push)};
                 else
                     w.gather_full = true;
             } else if (w.feat_count < kMaxFeatures) {
@@ -1433,6 +1581,9 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
                 for (int k = i; k > w.inside_first[a] && in[k].key.object < in[k - 1].key.object; --k)
                     std::swap(in[k], in[k - 1]);
         const bool pushed = glm::dot(push, push) > 0.0;
+        // A feature plane (an atom whose value is the distance) further than this cannot hold
+        // (ZoneCover); 0: none is left out.
+        const double far_plane = model.settings.drop_covered_atoms ? ZoneCover::far_plane(model, box) : 1e300;
         int i = 0;
         while (i < w.inside_count) {
             int j = i;
@@ -1441,7 +1592,8 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
                 inside |= in[j++].behind;
             if (!inside) {
                 for (int k = i; k < j; ++k)
-                    if (w.feat_count < kMaxFeatures) w.feats[w.feat_count++] = in[k].key;
+                    if (leaves_out_far_plane(model, in[k].key, w.tool_world[in[k].key.a], in[k].distance, far_plane)) continue;
+                    else if (w.feat_count < kMaxFeatures) w.feats[w.feat_count++] = in[k].key;
                     else w.gather_full = true;
             } else {
                 int best = -1;
@@ -1470,6 +1622,9 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
     }
     for (int i = 0; i < w.feat_count; ++i)
         add_feature_atoms(model, w, w.feats[i], w.tool_world[w.feats[i].a], back_of(w.feats[i].object));
+    // What the V-F atoms of each compliant zone cover of the rest (ZoneCover).
+    const int vf_count = w.atom_count;
+    const ZoneCover cover = cover_zones(model, base, box, w);
 
     // Convex (and mixed) object vertices against tool faces (F-V, Type 11): outside the face of
     // each piece most in front. One face that has the vertex beyond the reach puts the most in
@@ -1548,6 +1703,16 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             at.object = feature_object(w.overts[i]);
             at.object_vertex = v;
             at.tool_face = static_cast<uint32_t>(best);
+            if (obj.compliant) {
+                // Covered, with every alternative (within the tie tolerance of it), by the zone's
+                // give: left out.
+                const uint16_t z = atom_zone(model, at);
+                const double g = std::abs(best_s) + model.settings.tie_tol_m;
+                const double foot = glm::length(p - base.position) + g;
+                if (compliant_zone(model, at.object, z, true) &&
+                    -g - (box.move + box.turn * (foot + box.move) + box.contact + box.room) > cover.limit(z))
+                    continue;
+            }
             const int index = w.atom_count;
             add_atom(w, at);
             for (int j = 0; j < listed; ++j) {
@@ -1624,6 +1789,14 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
         const Vec3 mid_l = 0.5 * (l0 + l1);
         const double eo2 = glm::dot(eo, eo);
         const double near_o = far + 0.5 * glm::length(eo) + 1e-12;
+        // An atom of the pair no further than `covered` from either side of the edge is covered by
+        // its zone's give (ZoneCover), as is every pair whose tool edge passes that close to the
+        // edge's midpoint (no line is further from the edge than that); 0 where none is.
+        const uint16_t edge_zone = obj.triangle_zone.empty() ? obj.zone : obj.triangle_zone[e.tri[0]];
+        const double covered = compliant_zone(model, feature_object(w.oedges[i]), edge_zone, true)
+                                   ? std::max(0.0, -cover.limit(edge_zone) - cover.vertex_motion)
+                                   : 0.0;
+        const double covered_l = std::max(0.0, covered - 1e-12);
         for (int h = 0; h < hits; ++h) {
             const uint32_t te = w.edge_hits[h];
             const ModelTool::EdgeLine& line = tool.edge_lines[te];
@@ -1631,6 +1804,7 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             const double along = std::clamp(glm::dot(off, line.along) * line.inv_length2, 0.0, 1.0);
             const Vec3 gap = off - along * line.along;
             if (glm::dot(gap, gap) > near_o * near_o) continue;
+            if (glm::dot(gap, gap) < covered_l * covered_l) continue;
             // Closest points at an end of either edge (most pairs): a vertex's atom, not this one.
             const Vec3& a0 = w.tool_world[tool.edges[te][0]];
             const Vec3& a1 = w.tool_world[tool.edges[te][1]];
@@ -1656,6 +1830,10 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             // The tool edge behind the object edge is across the solid from it: not a contact.
             const double behind = sign * glm::dot(u / ul, a0 - v0);
             if (behind < -back_of(feature_object(w.oedges[i]))) continue;
+            // In front of a compliant object's edge, as in front of a rigid one, only within the
+            // reach (`far` reaches further only behind it).
+            if (obj.compliant && behind > reach && model.settings.drop_covered_atoms) continue;
+            if (std::abs(behind) < covered) continue;
             // Inside a compliant object: only an edge pressed the way the object pushes back
             // holds the tool (not one that is in by going past the side of a corner).
             if (obj.compliant && behind < -kBackFace && !along_push(sign * u / ul)) continue;
@@ -1668,6 +1846,7 @@ bool gather_atoms(const Model& model, const Pose& base, double reach, const Vec3
             add_atom(w, at);
         }
     }
+    remove_covered_atoms(cover, vf_count, w);
     return !w.gather_full;
 }
 
@@ -1822,23 +2001,6 @@ bool inside_box(const double x[6], const double lower[6], const double upper[6])
     for (int j = 0; j < 6; ++j)
         if (x[j] < lower[j] || x[j] > upper[j]) return false;
     return true;
-}
-
-// The contact zone of an atom's object feature.
-uint16_t atom_zone(const Model& model, const Atom& a) {
-    const ModelObject& o = model.objects[a.object];
-    if (o.triangle_zone.empty()) return o.zone;
-    switch (a.kind) {
-        case AtomKind::VertexFace:
-        case AtomKind::FixedAxis: return o.triangle_zone[a.object_triangle];
-        case AtomKind::FaceVertex: return o.vertex_zone[a.object_vertex];
-        case AtomKind::EdgeEdge: return o.triangle_zone[o.topology.edges[a.object_edge].tri[0]];
-    }
-    return o.zone;
-}
-
-const ModelMaterial& zone_material(const Model& model, uint16_t zone) {
-    return model.materials[model.zone_material[zone]];
 }
 
 // Slack variables for the compliant zones of the candidate's atoms, in the order the atoms meet
@@ -3044,7 +3206,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             stage_detect += micros(t0, t_detect_end);
 
             // ---- gather ----
-            res.stats.gather_truncated |= !gather_atoms(model, base, reach, push, w);
+            res.stats.gather_truncated |= !gather_atoms(model, base, rate_lower, rate_upper, push, w);
             t_gather_end = Clock::now();
             stage_gather += micros(t_detect_end, t_gather_end);
             res.stats.atoms_gathered = w.atom_count;
@@ -3093,7 +3255,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                 checked_valid = false;
                 solved = gather_near(model, base, w.tool_world, straight_lo, straight_hi, reach, w, false, prior_frame);
                 if (solved) {
-                    res.stats.gather_truncated |= !gather_atoms(model, base, reach, push, w);
+                    res.stats.gather_truncated |= !gather_atoms(model, base, straight_lo, straight_hi, push, w);
                     solved = solve_candidates(model, base, frame, target, target_local, straight_lo, straight_hi, reach,
                                               state, w, res.stats, x_sol) &&
                              !w.best_box_held;
@@ -3106,7 +3268,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                     scale *= 0.5;
                     continue;
                 }
-                res.stats.gather_truncated |= !gather_atoms(model, base, reach, push, w);
+                res.stats.gather_truncated |= !gather_atoms(model, base, lower, upper, push, w);
                 solved = false;
                 for (int round = 0; round < 2 && !solved; ++round) {
                     const double recover = round == 0 ? 0.0 : 10.0 * S.constraint_tol_m;

@@ -82,6 +82,13 @@ struct RendererSettings {
     // pass of detect, gather and solve. Off: another pass. Changes the step's answers (the other
     // atoms stay as gathered at the pass's start), not what they guarantee.
     bool rescue_virtual = true;
+    // Leave out of gather's set the atoms of compliant objects that cannot hold the tool anywhere
+    // in the step's box: those that stay clear of the surface whatever the zone gives, and those a
+    // zone's give covers, shallower than its deepest V-F atom by more than the box lets the tool
+    // move (docs/renderer.md, compliant contacts); and count an edge pair in front of such an
+    // object only within the reach, as on a rigid one. The QP and the exact checks then work on
+    // fewer rows, so a solution may differ in its last bits. Off: every atom in gather's reach.
+    bool drop_covered_atoms = true;
     qp::Settings qp;
 };
 
