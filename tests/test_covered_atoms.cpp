@@ -4,7 +4,7 @@
 // the bench's tissue runs give the same statuses and passes on every tick, and graphic poses,
 // forces and depths in the tissue that differ at most in the QP's last bits, from far fewer atoms.
 // Rigid objects are not touched: their scenes give the same answers bit for bit.
-#include "cli/bench_scenes.h"
+#include "bench_scene_helpers.h"
 #include "sulcus/engine/renderer.h"
 
 #include <gtest/gtest.h>
@@ -29,21 +29,12 @@ struct Tick {
     long atoms_gathered;
 };
 
-cli::BenchScene load(const std::string& name) {
-    cli::BenchScenes s = cli::load_bench_scenes({name}, std::string(SULCUS_SOURCE_DIR) + "/content/assets",
-                                                std::string(SULCUS_BINARY_DIR) + "/cases");
-    EXPECT_EQ(s.error, "");
-    EXPECT_EQ(s.scenes.size(), 1u);
-    return s.scenes.empty() ? cli::BenchScene{} : std::move(s.scenes.front());
-}
+cli::BenchScene load(const std::string& name) { return test::load_bench_scene(name); }
 
 std::unique_ptr<Model> model_for(const cli::BenchScene& b, bool drop_covered) {
     RendererSettings settings;
-    settings.haptic = b.scene.haptic;
     settings.drop_covered_atoms = drop_covered;
-    ModelBuild mb = build_model(b.scene.tool.mesh, b.scene.objects, settings, b.scene.materials);
-    EXPECT_TRUE(mb.model) << mb.error;
-    return std::move(mb.model);
+    return test::bench_model(b, settings);
 }
 
 std::vector<Tick> run(const Model& model, const std::vector<Pose>& poses, size_t count) {

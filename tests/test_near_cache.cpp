@@ -4,7 +4,7 @@
 // earlier pass's near set: it keeps every triangle the pass's box can reach but may leave out
 // ones only a fresh detect's looser reach takes in, so there its set is no larger. And what it carries from tick to tick stays within one session: sessions
 // interleaved on one thread, or a session run again after another, repeat their lone runs exactly.
-#include "cli/bench_scenes.h"
+#include "bench_scene_helpers.h"
 #include "sulcus/engine/renderer.h"
 #include "near_cache.h"
 
@@ -36,23 +36,13 @@ bool same_bits(const Tick& a, const Tick& b) {
            a.status == b.status && a.passes == b.passes && (a.passes > 0 ? a.near <= b.near : a.near == b.near);
 }
 
-cli::BenchScene load(const std::string& name) {
-    cli::BenchScenes s =
-        cli::load_bench_scenes({name}, std::string(SULCUS_SOURCE_DIR) + "/content/assets",
-                                 std::string(SULCUS_BINARY_DIR) + "/cases");
-    EXPECT_EQ(s.error, "");
-    EXPECT_EQ(s.scenes.size(), 1u);
-    return s.scenes.empty() ? cli::BenchScene{} : std::move(s.scenes.front());
-}
+cli::BenchScene load(const std::string& name) { return test::load_bench_scene(name); }
 
 std::unique_ptr<Model> model_for(const cli::BenchScene& b, bool near_cache, bool rescue_virtual = true) {
     RendererSettings settings;
-    settings.haptic = b.scene.haptic;
     settings.near_cache = near_cache;
     settings.rescue_virtual = rescue_virtual;
-    ModelBuild mb = build_model(b.scene.tool.mesh, b.scene.objects, settings, b.scene.materials);
-    EXPECT_TRUE(mb.model) << mb.error;
-    return std::move(mb.model);
+    return test::bench_model(b, settings);
 }
 
 Tick tick_of(const StepResult& r) {

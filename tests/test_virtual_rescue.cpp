@@ -3,7 +3,7 @@
 // whose plane holds it; swapping that atom for what the vertex faces at the answer and solving
 // again in the same box gives, tick for tick from the same state, the answers another pass of
 // detect, gather and solve gives, without most of those passes.
-#include "cli/bench_scenes.h"
+#include "bench_scene_helpers.h"
 #include "sulcus/engine/exact_check.h"
 #include "sulcus/engine/mesh.h"
 #include "sulcus/engine/renderer.h"
@@ -22,21 +22,12 @@ using namespace sulcus;
 
 namespace {
 
-cli::BenchScene load(const std::string& name) {
-    cli::BenchScenes s = cli::load_bench_scenes({name}, std::string(SULCUS_SOURCE_DIR) + "/content/assets",
-                                                std::string(SULCUS_BINARY_DIR) + "/cases");
-    EXPECT_EQ(s.error, "");
-    EXPECT_EQ(s.scenes.size(), 1u);
-    return s.scenes.empty() ? cli::BenchScene{} : std::move(s.scenes.front());
-}
+cli::BenchScene load(const std::string& name) { return test::load_bench_scene(name); }
 
 std::unique_ptr<Model> model_for(const cli::BenchScene& b, bool rescue) {
     RendererSettings settings;
-    settings.haptic = b.scene.haptic;
     settings.rescue_virtual = rescue;
-    ModelBuild mb = build_model(b.scene.tool.mesh, b.scene.objects, settings, b.scene.materials);
-    EXPECT_TRUE(mb.model) << mb.error;
-    return std::move(mb.model);
+    return test::bench_model(b, settings);
 }
 
 // Eq. 3's energy of an answer: how far the graphic tool is from the haptic tool.
