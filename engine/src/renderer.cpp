@@ -1332,15 +1332,22 @@ struct ZoneCover {
     // Per zone, the least bound above of a covering atom's value over the box (m; +inf with none,
     // and in a zone that gives way along one direction).
     double covered[kZones];
-    double vertex_motion = 0.0;  // how far a tool vertex moves in the box, at most (m)
+    PieceReach box;              // the step's box
     double margin = 0.0;         // the contact distance and twice the constraint tolerance (m)
+    double vertex_motion = 0.0;  // how far a tool vertex moves in the box, at most (m)
+
+    ZoneCover(const Model& model, const PieceReach& b)
+        : box(b),
+          margin(model.settings.contact_distance_m + 2.0 * model.settings.constraint_tol_m),
+          vertex_motion(motion(model.tool.radius_m)) {}
+
+    // How far a point rho from the tool's origin, fixed to the tool, moves in the box at most, with
+    // the reach's room (m).
+    double motion(double rho) const { return box.move + box.turn * (rho + box.move) + box.contact + box.room; }
 
     // A value (m) over which a V-F or separating-plane atom of a compliant zone holds over the
     // whole box, out of contact, whatever the give.
-    static double far_plane(const Model& model, const PieceReach& box) {
-        return box.move + box.turn * (model.tool.radius_m + box.move) + box.contact + box.room +
-               model.settings.contact_distance_m + 2.0 * model.settings.constraint_tol_m;
-    }
+    double far_plane() const { return vertex_motion + margin; }
 
     // The value (m) an atom of zone z must stay above over the box to be left out; +inf for a zone
     // not seen.
@@ -1377,14 +1384,11 @@ bool compliant_zone(const Model& model, uint16_t object, uint16_t z, bool along_
     return !along_normals || (d.x == 0.0 && d.y == 0.0 && d.z == 0.0);
 }
 
-// The zones' bounds from gather's V-F and separating-plane atoms (all of them are made before
-// the F-V and E-E atoms); each such atom's zone slot and value at the base stay in the workspace
-// for remove_covered_atoms.
-ZoneCover cover_zones(const Model& model, const Pose& base, const PieceReach& box, Workspace& w) {
-    ZoneCover c;
-    c.margin = model.settings.contact_distance_m + 2.0 * model.settings.constraint_tol_m;
-    c.vertex_motion = box.move + box.turn * (model.tool.radius_m + box.move) + box.contact + box.room;
-    if (!model.any_compliant || !model.settings.drop_covered_atoms) return c;
+// The zones' bounds in `c` from gather's V-F and separating-plane atoms (all of them are made
+// before the F-V and E-E atoms); each such atom's zone slot and value at the base stay in the
+// workspace for remove_covered_atoms.
+void cover_zones(const Model& model, const Pose& base, Workspace& w, ZoneCover& c) {
+    if (!model.any_compliant || !model.settings.drop_covered_atoms) return;
     const double x0[6] = {};
     const ToolPoseAt at = tool_pose_at(base, x0);
     int8_t* const slot = w.atom_zone_slot;
@@ -1407,7 +1411,6 @@ ZoneCover cover_zones(const Model& model, const Pose& base, const PieceReach& bo
     for (int i = 0; i < w.atom_count; ++i)
         if (slot[i] >= 0 && compliant_zone(model, w.atoms[i].object, c.zone[slot[i]], true))
             c.covered[slot[i]] = std::min(c.covered[slot[i]], w.atom_value[i] + c.vertex_motion);
-    return c;
 }
 
 // Drops those of the first `count` atoms (the ones cover_zones saw) that cannot hold the tool,
@@ -1437,6 +1440,8 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
     const ModelTool& tool = model.tool;
     const PieceReach box = piece_reach(model.settings, tool.radius_m, base.position, lower, upper);
     const double reach = box.reach;
+    // What cannot hold in the box (ZoneCover): its zones' bounds follow the V-F atoms.
+    ZoneCover cover(model, box);
     const SoftDepths& soft = w.soft;
     // World to the tool's frame (rotation part), for the E-E boxes.
     const Mat3 to_tool = glm::mat3_cast(glm::conjugate(base.orientation));
@@ -1583,7 +1588,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         const bool pushed = glm::dot(push, push) > 0.0;
         // A feature plane (an atom whose value is the distance) further than this cannot hold
         // (ZoneCover); 0: none is left out.
-        const double far_plane = model.settings.drop_covered_atoms ? ZoneCover::far_plane(model, box) : 1e300;
+        const double far_plane = model.settings.drop_covered_atoms ? cover.far_plane() : 1e300;
         int i = 0;
         while (i < w.inside_count) {
             int j = i;
@@ -1624,7 +1629,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         add_feature_atoms(model, w, w.feats[i], w.tool_world[w.feats[i].a], back_of(w.feats[i].object));
     // What the V-F atoms of each compliant zone cover of the rest (ZoneCover).
     const int vf_count = w.atom_count;
-    const ZoneCover cover = cover_zones(model, base, box, w);
+    cover_zones(model, base, w, cover);
 
     // Convex (and mixed) object vertices against tool faces (F-V, Type 11): outside the face of
     // each piece most in front. One face that has the vertex beyond the reach puts the most in
@@ -1709,8 +1714,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                 const uint16_t z = atom_zone(model, at);
                 const double g = std::abs(best_s) + model.settings.tie_tol_m;
                 const double foot = glm::length(p - base.position) + g;
-                if (compliant_zone(model, at.object, z, true) &&
-                    -g - (box.move + box.turn * (foot + box.move) + box.contact + box.room) > cover.limit(z))
+                if (compliant_zone(model, at.object, z, true) && -g - cover.motion(foot) > cover.limit(z))
                     continue;
             }
             const int index = w.atom_count;
