@@ -100,6 +100,47 @@ TEST(FastSat, AgreesWithTheFullTestOnProbeTips) {
     compare_on(make_probe_tip_collision(ProbeKind::Nabers), 1e-3, 3000, 3);
 }
 
+// The fast test's table of triangle normals along each triangle edge gives the edge-by-edge
+// pruning's answer to the bit: the same separation, axis, kind and index.
+void table_matches_edge_by_edge(const TriMesh& tool_mesh, double scale, int trials, unsigned seed) {
+    PlacedTool pt(tool_mesh);
+    ASSERT_TRUE(pt.mb.model) << pt.mb.error;
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int overlapping = 0, by_edges = 0;
+    for (int t = 0; t < trials; ++t) {
+        const Quat q = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+        pt.place(q, Vec3(u(rng) * scale * 0.2, u(rng) * scale * 0.2, u(rng) * scale * 0.2));
+        const ConvexView with_table = pt.view(true);
+        ASSERT_NE(with_table.triangle_normals, nullptr);
+        ASSERT_NE(with_table.edge_triangles, nullptr);
+        ASSERT_EQ(with_table.triangle_count, int(pt.tool->pieces[0].triangle_count));
+        ConvexView edge_by_edge = with_table;
+        edge_by_edge.triangle_normals = nullptr;
+        edge_by_edge.edge_triangles = nullptr;
+        Vec3 a, b, d;
+        triangle_near_vertex(pt, rng, u, scale, a, b, d);
+        const SatResult rt = separate_convex_triangle(with_table, a, b, d);
+        const SatResult re = separate_convex_triangle(edge_by_edge, a, b, d);
+        ASSERT_EQ(std::memcmp(&rt.separation, &re.separation, sizeof(double)), 0) << "trial " << t;
+        ASSERT_EQ(std::memcmp(&rt.axis, &re.axis, sizeof(Vec3)), 0) << "trial " << t;
+        ASSERT_EQ(rt.kind, re.kind) << "trial " << t;
+        ASSERT_EQ(rt.index, re.index) << "trial " << t;
+        overlapping += rt.separation <= 0.0;
+        by_edges += rt.kind == 2;
+    }
+    // Both kinds of answer, and edge pairs among them.
+    EXPECT_GT(overlapping, trials / 10);
+    EXPECT_LT(overlapping, trials - trials / 10);
+    EXPECT_GT(by_edges, 0);
+}
+
+TEST(FastSat, TriangleTableGivesTheEdgeByEdgeAnswerToTheBit) {
+    table_matches_edge_by_edge(make_box(Vec3(1e-3, 2e-3, 0.5e-3)), 2e-3, 2000, 11);
+    table_matches_edge_by_edge(make_probe_tip_collision(ProbeKind::Williams), 1e-3, 2000, 12);
+    table_matches_edge_by_edge(make_probe_tip_collision(ProbeKind::Nabers), 1e-3, 2000, 13);
+}
+
 // The guard takes the gap along one axis (the triangle's normal, the axis a pair's last test
 // found) for the separation where it is enough: it must never exceed the separation, and along
 // the test's own axis it must give the separation back.

@@ -158,35 +158,68 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
             out_local[k] = inv * glm::cross(te[k], tn);
         }
     }
-    for (int k = 0; k < 3; ++k) {
+    // The pair of the triangle's edge k and the polytope's edge e, with x (local frame) a normal in
+    // the edge's cone where the pair's arcs cross (zero without the Gauss-map test).
+    auto edge_pair = [&](int k, int e, const Vec3& x) {
         const double scale_e = glm::length(te[k]);
-        for (int e = 0; e < poly.edge_count; ++e) {
-            Vec3 x(0.0);
-            if (fast && tl > 0.0) {
-                const Vec3& n1 = poly.edge_normals[e][0];
-                const Vec3& n2 = poly.edge_normals[e][1];
-                const double al = glm::dot(n1, e_local[k]), be = glm::dot(n2, e_local[k]);
-                const double tol = 1e-12 * scale_e;
+        const Vec3 pe = poly.vertices[poly.edges[e][1]] - poly.vertices[poly.edges[e][0]];
+        const Vec3 u = glm::cross(te[k], pe);
+        const double ul = glm::length(u);
+        // Near-parallel edge pairs give no new axis: the face normals cover them.
+        if (ul <= 1e-9 * scale_e * glm::length(pe)) return;
+        if (glm::length(x) > 0.0) {
+            // A face of the Minkowski difference: along its normal (x, in the edge's normal
+            // cone) the polytope reaches farthest at this edge, so its extent is one dot.
+            Vec3 n = u / ul;
+            if (glm::dot(n, *poly.rotation * x) < 0.0) n = -n;
+            const double pmax = glm::dot(n, poly.vertices[poly.edges[e][0]]);
+            const double tmin = std::min(glm::dot(n, a), std::min(glm::dot(n, b), glm::dot(n, c)));
+            keep(tmin - pmax, -1.0, n, 2, k * poly.edge_count + e);
+            return;
+        }
+        consider(u / ul, 2, k * poly.edge_count + e);
+    };
+    if (!(fast && tl > 0.0)) {
+        for (int k = 0; k < 3; ++k)
+            for (int e = 0; e < poly.edge_count; ++e) edge_pair(k, e, Vec3(0.0));
+        return best;
+    }
+    // The arcs cross where the edge's two normals are not both on one side of the plane normal to
+    // the triangle's edge, and x, their blend on that plane, faces out of the triangle.
+    auto arcs_cross = [&](int k, int e, double al, double be, double out_length) {
+        const Vec3 x = std::abs(be) * poly.edge_normals[e][0] + std::abs(al) * poly.edge_normals[e][1];
+        if (glm::dot(x, out_local[k]) > 1e-9 * glm::length(x) * out_length) return;
+        edge_pair(k, e, x);
+    };
+    // Where the polytope's triangles fit the table, each triangle normal's dot product with the
+    // triangle's edge (the same products as taken edge by edge) and its side are taken once for
+    // every polytope edge at it.
+    constexpr int kTableTriangles = 256;
+    const bool table = poly.triangle_normals && poly.edge_triangles && poly.triangle_count <= kTableTriangles;
+    double along[kTableTriangles];
+    uint8_t side[kTableTriangles];
+    for (int k = 0; k < 3; ++k) {
+        const double tol = 1e-12 * glm::length(te[k]);
+        const double out_length = glm::length(out_local[k]);
+        if (!table) {
+            for (int e = 0; e < poly.edge_count; ++e) {
+                const double al = glm::dot(poly.edge_normals[e][0], e_local[k]);
+                const double be = glm::dot(poly.edge_normals[e][1], e_local[k]);
                 if ((al > tol && be > tol) || (al < -tol && be < -tol)) continue;
-                x = std::abs(be) * n1 + std::abs(al) * n2;
-                if (glm::dot(x, out_local[k]) > 1e-9 * glm::length(x) * glm::length(out_local[k])) continue;
+                arcs_cross(k, e, al, be, out_length);
             }
-            const Vec3 pe = poly.vertices[poly.edges[e][1]] - poly.vertices[poly.edges[e][0]];
-            const Vec3 u = glm::cross(te[k], pe);
-            const double ul = glm::length(u);
-            // Near-parallel edge pairs give no new axis: the face normals cover them.
-            if (ul <= 1e-9 * scale_e * glm::length(pe)) continue;
-            if (fast && tl > 0.0 && glm::length(x) > 0.0) {
-                // A face of the Minkowski difference: along its normal (x, in the edge's normal
-                // cone) the polytope reaches farthest at this edge, so its extent is one dot.
-                Vec3 n = u / ul;
-                if (glm::dot(n, *poly.rotation * x) < 0.0) n = -n;
-                const double pmax = glm::dot(n, poly.vertices[poly.edges[e][0]]);
-                const double tmin = std::min(glm::dot(n, a), std::min(glm::dot(n, b), glm::dot(n, c)));
-                keep(tmin - pmax, -1.0, n, 2, k * poly.edge_count + e);
-                continue;
-            }
-            consider(u / ul, 2, k * poly.edge_count + e);
+            continue;
+        }
+        for (int t = 0; t < poly.triangle_count; ++t) {
+            const double d = glm::dot(poly.triangle_normals[t], e_local[k]);
+            along[t] = d;
+            side[t] = uint8_t((d > tol ? 1 : 0) | (d < -tol ? 2 : 0));
+        }
+        for (int e = 0; e < poly.edge_count; ++e) {
+            const uint32_t t0 = poly.edge_triangles[e][0], t1 = poly.edge_triangles[e][1];
+            // Both above the tolerance or both below it.
+            if (side[t0] & side[t1]) continue;
+            arcs_cross(k, e, along[t0], along[t1], out_length);
         }
     }
     return best;

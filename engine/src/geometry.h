@@ -84,6 +84,12 @@ struct ConvexView {
     const double* depths = nullptr;
     const Vec3 (*edge_normals)[2] = nullptr;
     const Quat* rotation = nullptr;
+    // Optional with edge_normals: the polytope's triangles' normals in its own frame and, for each
+    // edge, the two triangles whose normals edge_normals holds (the same values). The fast test
+    // then takes a direction's dot product with each triangle normal once for all its edges.
+    const Vec3* triangle_normals = nullptr;
+    int triangle_count = 0;
+    const uint32_t (*edge_triangles)[2] = nullptr;
     // Optional bounding capsules: capsule k is the segment capsule[k]-capsule[k + 1] with radius
     // capsule_radii[k]; every point of the polytope lies in one of them. Gives cheap lower bounds
     // on distance.

@@ -277,6 +277,7 @@ std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
             tool.edges.push_back({e.v[0] + piece.vertex_begin, e.v[1] + piece.vertex_begin});
             tool.piece_edges.push_back({e.v[0], e.v[1]});
             tool.edge_normals.push_back({topo.triangle_normals[e.tri[0]], topo.triangle_normals[e.tri[1]]});
+            tool.edge_triangles.push_back({e.tri[0], e.tri[1]});
             const Vec3 from = mesh.vertices[e.v[0]], along = mesh.vertices[e.v[1]] - from;
             const double length2 = glm::dot(along, along);
             tool.edge_lines.push_back({from, along, length2 > 0.0 ? 1.0 / length2 : 0.0});
@@ -300,8 +301,10 @@ std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
     }
     piece.centre = box.center();
     for (const Vec3& v : mesh.vertices) piece.spread_m = std::max(piece.spread_m, glm::length(v - piece.centre));
-    for (const auto& t : mesh.triangles) {
+    for (size_t i = 0; i < mesh.triangles.size(); ++i) {
+        const auto& t = mesh.triangles[i];
         tool.piece_triangles.push_back(t);
+        tool.piece_triangle_normals.push_back(topo.triangle_normals[i]);
         tool.mesh.triangles.push_back({t[0] + piece.vertex_begin, t[1] + piece.vertex_begin, t[2] + piece.vertex_begin});
     }
     set_bounding_capsule(mesh, piece);

@@ -214,6 +214,12 @@ struct ModelTool {
     std::vector<std::array<uint32_t, 2>> edges;
     std::vector<std::array<uint32_t, 2>> piece_edges;
     std::vector<std::array<Vec3, 2>> edge_normals;
+    // The same two normals as indices of the piece's triangles (piece_triangle_normals): the
+    // separating-axis test takes each triangle normal's dot product with a direction once, for
+    // all the edges that share it.
+    std::vector<std::array<uint32_t, 2>> edge_triangles;
+    // Each piece's triangles' unit normals (local frame), contiguous per piece as piece_triangles.
+    std::vector<Vec3> piece_triangle_normals;
     // Each edge as a segment in the local frame: its first vertex, the vector to its second, and
     // the reciprocal of that vector's squared length (0 for a point). The cheap cull of the tool
     // edges near an object edge works on them, in the tool's frame.
