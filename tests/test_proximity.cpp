@@ -271,5 +271,66 @@ TEST(Proximity, NoObjectsMeansNothingNear) {
     EXPECT_FALSE(tool_collides(*model, Pose{}));
 }
 
+// closest_at_an_end, taken in a frame moved and turned from the world's as the renderer's tool
+// frame is, never says "at an end" where closest_segment_params in the world finds the closest
+// points inside both segments: on pairs built with their lines' closest points just inside or
+// just outside an end (by 1e-12 to 1e-5 of the length), at angles down to near parallel,
+// 10 um to 1 mm long, up to 0.1 m from the origin. And it does settle the pairs clearly outside.
+TEST(SegmentClosest, AnEndSeenInAnotherFrameIsAnEndInTheWorld) {
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<double> u(-1.0, 1.0), unit(0.0, 1.0);
+    auto random_unit = [&] {
+        for (;;) {
+            const Vec3 v(u(rng), u(rng), u(rng));
+            if (glm::length(v) > 0.1 && glm::length(v) < 1.0) return glm::normalize(v);
+        }
+    };
+    const double offsets[] = {-1e-5, -1e-7, -1e-9, -1e-12, 1e-12, 1e-9, 1e-7, 1e-5, 1e-3, 0.3};
+    const double sines[] = {1.0, 0.3, 0.1, 0.03, 0.011, 0.0101, 0.009, 1e-3};
+    int inside = 0, settled_outside = 0, clearly_outside = 0;
+    for (int trial = 0; trial < 40000; ++trial) {
+        const double len1 = std::pow(10.0, -5.0 + 2.0 * unit(rng)), len2 = std::pow(10.0, -5.0 + 2.0 * unit(rng));
+        const Vec3 origin = 0.1 * Vec3(u(rng), u(rng), u(rng));
+        const Vec3 d1 = len1 * random_unit();
+        // The common perpendicular: from s0 along segment 1 to t0 along segment 2, `gap` long.
+        const double delta = offsets[rng() % std::size(offsets)];
+        const bool past_end = rng() % 2 == 0;
+        const double s0 = past_end ? 1.0 + delta : -delta;  // delta < 0: inside
+        const double t0 = 0.05 + 0.9 * unit(rng);
+        Vec3 n = glm::cross(d1, random_unit());
+        n = glm::normalize(n);
+        const double sine = sines[rng() % std::size(sines)];
+        const Vec3 across = glm::normalize(glm::cross(n, d1));
+        const Vec3 d2 = len2 * (std::sqrt(1.0 - sine * sine) * glm::normalize(d1) + sine * across);
+        const double gap = 1e-4 * unit(rng);
+        const Vec3 p0 = origin;
+        const Vec3 q0 = p0 + s0 * d1 + gap * n - t0 * d2;
+        // The world's answer.
+        double s, t;
+        closest_segment_params(d1, d2, p0 - q0, glm::dot(d1, d1), glm::dot(d2, d2), s, t);
+        const bool interior = s > 1e-9 && s < 1.0 - 1e-9 && t > 1e-9 && t < 1.0 - 1e-9;
+        // The same segments in a frame turned by q and moved to p.
+        const Quat q = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+        const Vec3 p = origin + 1e-3 * Vec3(u(rng), u(rng), u(rng));
+        const glm::dmat3 to_local = glm::mat3_cast(glm::conjugate(q));
+        const Vec3 p0l = to_local * (p0 - p), p1l = to_local * (p0 + d1 - p);
+        const Vec3 q0l = to_local * (q0 - p), q1l = to_local * (q0 + d2 - p);
+        const Vec3 d1l = p1l - p0l, d2l = q1l - q0l;
+        const bool at_end = closest_at_an_end(d1l, d2l, p0l - q0l, glm::dot(d1l, d1l), glm::dot(d2l, d2l));
+        if (interior) {
+            ++inside;
+            ASSERT_FALSE(at_end) << "trial " << trial << ": s " << s << " t " << t << " sine " << sine;
+        }
+        if (delta > 2e-8 / (sine * sine) && sine * sine > 1.01e-4) {
+            ++clearly_outside;
+            settled_outside += at_end;
+        }
+    }
+    EXPECT_GT(inside, 5000);
+    // Clearly outside (by twice the margin, at a squared sine over 1e-4): settled.
+    EXPECT_GT(clearly_outside, 3000);
+    EXPECT_EQ(settled_outside, clearly_outside);
+}
+
 }  // namespace
 }  // namespace sulcus

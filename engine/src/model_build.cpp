@@ -280,7 +280,7 @@ std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
             tool.edge_triangles.push_back({e.tri[0], e.tri[1]});
             const Vec3 from = mesh.vertices[e.v[0]], along = mesh.vertices[e.v[1]] - from;
             const double length2 = glm::dot(along, along);
-            tool.edge_lines.push_back({from, along, length2 > 0.0 ? 1.0 / length2 : 0.0});
+            tool.edge_lines.push_back({from, along, length2 > 0.0 ? 1.0 / length2 : 0.0, length2});
         }
     piece.edge_count = uint32_t(tool.edges.size()) - piece.edge_begin;
     {

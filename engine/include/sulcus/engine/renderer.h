@@ -227,6 +227,7 @@ struct ModelTool {
         Vec3 from{0.0};
         Vec3 along{0.0};
         double inv_length2 = 0.0;
+        double length2 = 0.0;  // the vector's squared length (m^2)
     };
     std::vector<EdgeLine> edge_lines;
     // Triangles with indices relative to their piece's first vertex.
