@@ -92,6 +92,7 @@ double micros(Clock::time_point a, Clock::time_point b) {
 constexpr int kMaxToolVertices = 4096;
 constexpr int kMaxToolFaces = 4096;
 constexpr int kMaxToolEdges = 3 * kMaxToolVertices;
+static_assert(kMaxToolEdges <= 65536, "a piece's edges are counted in 16 bits (Workspace::edge_hits, EdgeHitMemo::hits)");
 static_assert(kToolCapsules <= 16, "Bvh::query_capsule_chain takes at most 16 capsules");
 constexpr int kMaxNear = 8192;
 constexpr int kMaxAtoms = 1024;
@@ -195,7 +196,7 @@ struct CandidateResult {
 struct Workspace {
     Vec3 tool_world[kMaxToolVertices];
     Vec3 tool_moved[kMaxToolVertices];
-    uint32_t edge_hits[kMaxToolEdges];  // tool edges near one object edge
+    uint16_t edge_hits[kMaxToolEdges];  // tool edges near one object edge, from the piece's first
     Vec3 face_n[kMaxToolFaces];
     double face_d[kMaxToolFaces];
     double face_s[kMaxToolFaces];  // gather: an object vertex's height over each face of a piece (m)
@@ -1764,14 +1765,16 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         Workspace::EdgeHitMemo* const pair[2] = {&w.edge_memo[slot], &w.edge_memo[slot ^ 1u]};
         auto owns = [&](const Workspace::EdgeHitMemo* m) { return m->key == memo_key && m->model == model.serial; };
         Workspace::EdgeHitMemo* memo = !memo_on ? nullptr : owns(pair[0]) ? pair[0] : owns(pair[1]) ? pair[1] : nullptr;
+        const uint16_t* edge_hits = w.edge_hits;
         if (memo && memo->box.contains(local)) {
             memo->used = w.edge_memo_clock;
-            for (int h = 0; h < memo->count; ++h) w.edge_hits[hits++] = piece.edge_begin + memo->hits[h];
+            edge_hits = memo->hits;
+            hits = memo->count;
         } else {
             Aabb box = local;
             if (memo_on) box.inflate(std::min(far, Workspace::kEdgeMemoRoom));
             piece.edge_bvh.query(box, [&](uint32_t e) {
-                w.edge_hits[hits++] = piece.edge_begin + e;
+                w.edge_hits[hits++] = uint16_t(e);
                 return true;
             });
             std::sort(w.edge_hits, w.edge_hits + hits);
@@ -1783,7 +1786,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                 memo->used = w.edge_memo_clock;
                 memo->box = box;
                 memo->count = hits;
-                for (int h = 0; h < hits; ++h) memo->hits[h] = uint16_t(w.edge_hits[h] - piece.edge_begin);
+                std::copy(w.edge_hits, w.edge_hits + hits, memo->hits);
             }
         }
         // Only a pair whose closest points lie inside both edges makes an atom, and most do not.
@@ -1811,7 +1814,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                                    : 0.0;
         const double covered_l = std::max(0.0, covered - 1e-12);
         for (int h = 0; h < hits; ++h) {
-            const uint32_t te = w.edge_hits[h];
+            const uint32_t te = piece.edge_begin + edge_hits[h];
             const ModelTool::EdgeLine& line = tool.edge_lines[te];
             if (closest_at_an_end(line.along, d_l, line.from - l0, line.length2, e_l)) continue;
             const Vec3 off = mid_l - line.from;
