@@ -1793,10 +1793,9 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         // The lines' closest points, taken in the tool's frame on the tool's edges as built
         // (ModelTool::edge_lines), settle that first where they are clearly outside an edge
         // (closest_at_an_end): the exact test below would leave the pair. The rounding of the
-        // move into the frame moves their parameters by some 1e-12 over the squared sine of the
-        // edges' angle (measured over every pair of the bench scenes' runs: at most 1e-10 at
-        // squared sines over 1e-2, 6e-9 between 1e-4 and 1e-3), under the test's margin of 1e-8
-        // over it.
+        // move into the frame moves their parameters far less than the test's margin of 1e-8
+        // over the squared sine of the edges' angle (measured over every pair of the bench
+        // scenes' runs: at most 1e-10 at squared sines over 1e-2, 6e-9 between 1e-4 and 1e-3).
         const Vec3 d_l = l1 - l0;
         const double e_l = glm::dot(d_l, d_l);
         // A segment is no closer to the tool edge than the distance from its midpoint less its
