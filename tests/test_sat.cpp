@@ -64,6 +64,12 @@ void triangle_near_vertex(const PlacedTool& pt, std::mt19937& rng, std::uniform_
     d = c + s * Vec3(u(rng), u(rng), u(rng));
 }
 
+// The placed tool at a random orientation, moved up to 0.2 `scale` along each axis.
+void place_at_random(PlacedTool& pt, std::mt19937& rng, std::uniform_real_distribution<double>& u, double scale) {
+    const Quat q = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+    pt.place(q, Vec3(u(rng) * scale * 0.2, u(rng) * scale * 0.2, u(rng) * scale * 0.2));
+}
+
 void compare_on(const TriMesh& tool_mesh, double scale, int trials, unsigned seed) {
     PlacedTool pt(tool_mesh);
     ASSERT_TRUE(pt.mb.model) << pt.mb.error;
@@ -71,8 +77,7 @@ void compare_on(const TriMesh& tool_mesh, double scale, int trials, unsigned see
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     int overlapping = 0, separated = 0;
     for (int t = 0; t < trials; ++t) {
-        const Quat q = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
-        pt.place(q, Vec3(u(rng) * scale * 0.2, u(rng) * scale * 0.2, u(rng) * scale * 0.2));
+        place_at_random(pt, rng, u, scale);
         const ConvexView slow = pt.view(false);
         const ConvexView fast = pt.view(true);
         Vec3 a, b, d;
@@ -109,8 +114,7 @@ void table_matches_edge_by_edge(const TriMesh& tool_mesh, double scale, int tria
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     int overlapping = 0, by_edges = 0;
     for (int t = 0; t < trials; ++t) {
-        const Quat q = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
-        pt.place(q, Vec3(u(rng) * scale * 0.2, u(rng) * scale * 0.2, u(rng) * scale * 0.2));
+        place_at_random(pt, rng, u, scale);
         const ConvexView with_table = pt.view(true);
         ASSERT_NE(with_table.triangle_normals, nullptr);
         ASSERT_NE(with_table.edge_triangles, nullptr);

@@ -160,13 +160,13 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
     }
     // The pair of the triangle's edge k and the polytope's edge e, with x (local frame) a normal in
     // the edge's cone where the pair's arcs cross (zero without the Gauss-map test).
+    const double scale_e[3] = {glm::length(te[0]), glm::length(te[1]), glm::length(te[2])};
     auto edge_pair = [&](int k, int e, const Vec3& x) {
-        const double scale_e = glm::length(te[k]);
         const Vec3 pe = poly.vertices[poly.edges[e][1]] - poly.vertices[poly.edges[e][0]];
         const Vec3 u = glm::cross(te[k], pe);
         const double ul = glm::length(u);
         // Near-parallel edge pairs give no new axis: the face normals cover them.
-        if (ul <= 1e-9 * scale_e * glm::length(pe)) return;
+        if (ul <= 1e-9 * scale_e[k] * glm::length(pe)) return;
         if (glm::length(x) > 0.0) {
             // A face of the Minkowski difference: along its normal (x, in the edge's normal
             // cone) the polytope reaches farthest at this edge, so its extent is one dot.
@@ -199,7 +199,7 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
     double along[kTableTriangles];
     uint8_t side[kTableTriangles];
     for (int k = 0; k < 3; ++k) {
-        const double tol = 1e-12 * glm::length(te[k]);
+        const double tol = 1e-12 * scale_e[k];
         const double out_length = glm::length(out_local[k]);
         if (!table) {
             for (int e = 0; e < poly.edge_count; ++e) {

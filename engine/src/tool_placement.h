@@ -46,12 +46,9 @@ inline ConvexView tool_convex_view(const ModelTool& tool, size_t k, const Vec3* 
     v.edge_count = static_cast<int>(piece.edge_count);
     v.depths = tool.face_depths.data() + piece.face_begin;
     v.edge_normals = reinterpret_cast<const Vec3 (*)[2]>(tool.edge_normals.data() + piece.edge_begin);
-    if (tool.edge_triangles.size() == tool.edge_normals.size() &&
-        tool.piece_triangle_normals.size() == tool.piece_triangles.size()) {
-        v.triangle_normals = tool.piece_triangle_normals.data() + piece.triangle_begin;
-        v.triangle_count = static_cast<int>(piece.triangle_count);
-        v.edge_triangles = reinterpret_cast<const uint32_t (*)[2]>(tool.edge_triangles.data() + piece.edge_begin);
-    }
+    v.triangle_normals = tool.piece_triangle_normals.data() + piece.triangle_begin;
+    v.triangle_count = static_cast<int>(piece.triangle_count);
+    v.edge_triangles = reinterpret_cast<const uint32_t (*)[2]>(tool.edge_triangles.data() + piece.edge_begin);
     v.rotation = rotation;
     if (piece.descend) {
         v.neighbour_offsets = tool.neighbour_offsets.data() + piece.vertex_begin;
