@@ -332,5 +332,58 @@ TEST(SegmentClosest, AnEndSeenInAnotherFrameIsAnEndInTheWorld) {
     EXPECT_EQ(settled_outside, clearly_outside);
 }
 
+// pairs_not_at_an_end (four pairs at a time where the build has AVX2) leaves open exactly the pairs
+// closest_at_an_end leaves open, in their order: over lists of 0 to 13 lines taken in any order
+// and with repeats (the tails of fewer than four included), built with their closest points just
+// inside or past an end, at squared sines near the 1e-4 below which nothing is decided, and with
+// points for segments.
+TEST(SegmentClosest, FourAtATimeLeaveOpenWhatOneAtATimeDoes) {
+    std::mt19937 rng(57);
+    std::uniform_real_distribution<double> u(-1.0, 1.0), unit(0.0, 1.0);
+    auto random_unit = [&] {
+        for (;;) {
+            const Vec3 v(u(rng), u(rng), u(rng));
+            if (glm::length(v) > 0.1 && glm::length(v) < 1.0) return glm::normalize(v);
+        }
+    };
+    const double offsets[] = {-1e-5, -1e-9, -1e-12, 0.0, 1e-12, 1e-9, 1e-7, 1e-5, 0.3};
+    const double sines[] = {1.0, 0.1, 0.0101, 0.01, 0.0099, 1e-3, 0.0};
+    std::vector<ModelTool::EdgeLine> lines(64);
+    int open_total = 0, settled_total = 0;
+    for (int trial = 0; trial < 4000; ++trial) {
+        const Vec3 origin = 0.01 * Vec3(u(rng), u(rng), u(rng));
+        const Vec3 d2 = std::pow(10.0, -5.0 + 2.0 * unit(rng)) * random_unit();
+        for (ModelTool::EdgeLine& line : lines) {
+            const double len = rng() % 16 == 0 ? 0.0 : std::pow(10.0, -5.0 + 2.0 * unit(rng));
+            const double sine = sines[rng() % std::size(sines)];
+            const Vec3 across = glm::normalize(glm::cross(glm::cross(d2, random_unit()), d2));
+            line.along = len * (std::sqrt(1.0 - sine * sine) * glm::normalize(d2) + sine * across);
+            const double delta = offsets[rng() % std::size(offsets)];
+            const double t0 = rng() % 2 == 0 ? 1.0 + delta : -delta;  // on d2's line, from origin
+            const double s0 = unit(rng) * 1.4 - 0.2;                  // on the line's own
+            line.from = origin + t0 * d2 + 1e-4 * unit(rng) * across - s0 * line.along;
+            line.length2 = glm::dot(line.along, line.along);
+            line.inv_length2 = line.length2 > 0.0 ? 1.0 / line.length2 : 0.0;
+        }
+        const int count = int(rng() % 14);
+        uint16_t hits[16], open[16], expected[16];
+        for (int h = 0; h < count; ++h) hits[h] = uint16_t(rng() % lines.size());
+        const double e = glm::dot(d2, d2);
+        int expected_count = 0;
+        for (int h = 0; h < count; ++h) {
+            const ModelTool::EdgeLine& line = lines[hits[h]];
+            if (!closest_at_an_end(line.along, d2, line.from - origin, line.length2, e)) expected[expected_count++] = hits[h];
+        }
+        const int open_count = pairs_not_at_an_end(lines.data(), hits, count, d2, origin, e, open);
+        ASSERT_EQ(open_count, expected_count) << "trial " << trial;
+        for (int h = 0; h < open_count; ++h) ASSERT_EQ(open[h], expected[h]) << "trial " << trial << ", pair " << h;
+        open_total += open_count;
+        settled_total += count - open_count;
+    }
+    // Both answers come up often.
+    EXPECT_GT(open_total, 3000);
+    EXPECT_GT(settled_total, 3000);
+}
+
 }  // namespace
 }  // namespace sulcus

@@ -197,6 +197,7 @@ struct Workspace {
     Vec3 tool_world[kMaxToolVertices];
     Vec3 tool_moved[kMaxToolVertices];
     uint16_t edge_hits[kMaxToolEdges];  // tool edges near one object edge, from the piece's first
+    uint16_t edge_open[kMaxToolEdges];  // those of them closest_at_an_end leaves open, likewise
     Vec3 face_n[kMaxToolFaces];
     double face_d[kMaxToolFaces];
     double face_s[kMaxToolFaces];  // gather: an object vertex's height over each face of a piece (m)
@@ -1792,10 +1793,11 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         // Only a pair whose closest points lie inside both edges makes an atom, and most do not.
         // The lines' closest points, taken in the tool's frame on the tool's edges as built
         // (ModelTool::edge_lines), settle that first where they are clearly outside an edge
-        // (closest_at_an_end): the exact test below would leave the pair. The rounding of the
-        // move into the frame moves their parameters far less than the test's margin of 1e-8
-        // over the squared sine of the edges' angle (measured over every pair of the bench
-        // scenes' runs: at most 1e-10 at squared sines over 1e-2, 6e-9 between 1e-4 and 1e-3).
+        // (closest_at_an_end, four pairs at a time by pairs_not_at_an_end): the exact test below
+        // would leave the pair. The rounding of the move into the frame moves their parameters far
+        // less than the test's margin of 1e-8 over the squared sine of the edges' angle (measured
+        // over every pair of the bench scenes' runs: at most 1e-10 at squared sines over 1e-2,
+        // 6e-9 between 1e-4 and 1e-3).
         const Vec3 d_l = l1 - l0;
         const double e_l = glm::dot(d_l, d_l);
         // A segment is no closer to the tool edge than the distance from its midpoint less its
@@ -1812,10 +1814,11 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                                    ? std::max(0.0, -cover.limit(edge_zone) - cover.vertex_motion)
                                    : 0.0;
         const double covered_l = std::max(0.0, covered - 1e-12);
-        for (int h = 0; h < hits; ++h) {
-            const uint32_t te = piece.edge_begin + edge_hits[h];
+        const int open = pairs_not_at_an_end(tool.edge_lines.data() + piece.edge_begin, edge_hits, hits, d_l, l0, e_l,
+                                             w.edge_open);
+        for (int h = 0; h < open; ++h) {
+            const uint32_t te = piece.edge_begin + w.edge_open[h];
             const ModelTool::EdgeLine& line = tool.edge_lines[te];
-            if (closest_at_an_end(line.along, d_l, line.from - l0, line.length2, e_l)) continue;
             const Vec3 off = mid_l - line.from;
             const double along = std::clamp(glm::dot(off, line.along) * line.inv_length2, 0.0, 1.0);
             const Vec3 gap = off - along * line.along;
