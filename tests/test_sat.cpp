@@ -1,5 +1,6 @@
 // The fast separating-axis test (face extents from the model, edge pairs pruned on the Gauss map)
 // against the plain one over every candidate axis.
+#include "capsule_bounds.h"
 #include "geometry.h"
 #include "tool_placement.h"
 
@@ -652,6 +653,86 @@ TEST(Gjk, TheSeparationCheckBoundsTheSeparationAndMeetsAFloorUnderIt) {
     EXPECT_EQ(met, apart);
     EXPECT_GT(resting, 300);
     EXPECT_GT(resting_at_once, resting * 9 / 10);
+}
+
+// piece_compliant_bound4 gives each of its four triangles the bound piece_compliant_bound gives it,
+// to the bit (memcmp): over the probe tips' pieces with capsules at random poses, with triangles
+// of 5 um to 0.55 mm round a tool vertex (apart from the capsules and overlapping them, in every
+// mix across the four), far ones, and ones whose sphere is centred on a capsule point (the tangent
+// bound's own fallback there).
+void bound4_matches(const TriMesh& tool_mesh, double scale, int trials, unsigned seed) {
+#if defined(__AVX2__)
+    PlacedTool pt(tool_mesh);
+    ASSERT_TRUE(pt.mb.model) << pt.mb.error;
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int with_capsules = 0, apart = 0, overlapping = 0, mixed = 0, centred = 0;
+    for (size_t k = 0; k < pt.tool->pieces.size(); ++k) {
+        const ToolPiece& piece = pt.tool->pieces[k];
+        if (piece.capsule_count == 0) continue;
+        ++with_capsules;
+        for (int t = 0; t < trials; ++t) {
+            place_at_random(pt, rng, u, scale);
+            const CapsuleLine line = capsule_line(piece, pt.caps + k * (kToolCapsules + 1));
+            Vec3 corner[4][3];
+            TriangleSphere sphere[4];
+            for (int lane = 0; lane < 4; ++lane) {
+                Vec3& a = corner[lane][0];
+                Vec3& b = corner[lane][1];
+                Vec3& d = corner[lane][2];
+                triangle_near_vertex(pt, rng, u, scale, a, b, d);
+                const int kind = int(rng() % 8);
+                if (kind == 0) {
+                    // Far off.
+                    const Vec3 away = 20.0 * scale * Vec3(u(rng), u(rng), u(rng));
+                    a += away, b += away, d += away;
+                } else if (kind == 1) {
+                    // Small.
+                    const double shrink = 0.01;
+                    b = a + shrink * (b - a), d = a + shrink * (d - a);
+                }
+                sphere[lane] = triangle_sphere(a, b, d);
+                if (kind == 2) {
+                    sphere[lane].centre = line.axis[rng() % (piece.capsule_count + 1)];
+                    sphere[lane].centre_norm_m = glm::length(sphere[lane].centre);
+                    ++centred;
+                }
+            }
+            const TriangleSphere* spheres[4];
+            const Vec3* corners[4][3];
+            for (int lane = 0; lane < 4; ++lane) {
+                spheres[lane] = &sphere[lane];
+                for (int m = 0; m < 3; ++m) corners[lane][m] = &corner[lane][m];
+            }
+            double four[4];
+            piece_compliant_bound4(piece, line, spheres, corners, four);
+            int lanes_apart = 0;
+            for (int lane = 0; lane < 4; ++lane) {
+                const double one = piece_compliant_bound(piece, line, sphere[lane], corner[lane][0], corner[lane][1],
+                                                         corner[lane][2]);
+                ASSERT_EQ(std::memcmp(&one, &four[lane], sizeof one), 0)
+                    << "piece " << k << ", trial " << t << ", lane " << lane << ": " << one << " against " << four[lane];
+                lanes_apart += one > 0.0;
+            }
+            apart += lanes_apart;
+            overlapping += 4 - lanes_apart;
+            mixed += lanes_apart > 0 && lanes_apart < 4;
+        }
+    }
+    EXPECT_GT(with_capsules, 0);
+    EXPECT_GT(apart, trials);
+    EXPECT_GT(overlapping, trials / 4);
+    EXPECT_GT(mixed, trials / 10);
+    EXPECT_GT(centred, trials / 10);
+#else
+    (void)tool_mesh, (void)scale, (void)trials, (void)seed;
+    GTEST_SKIP() << "built without AVX2: there is no four-wide bound";
+#endif
+}
+
+TEST(CapsuleBounds, FourAtATimeGiveEachTriangleItsOwnBoundToTheBit) {
+    bound4_matches(make_probe_tip_collision(ProbeKind::Williams), 1e-3, 3000, 21);
+    bound4_matches(make_probe_tip_collision(ProbeKind::Nabers), 1e-3, 3000, 22);
 }
 
 TEST(Gjk, BoundsBracketTheExactDistanceOnABox) { gjk_brackets_the_distance(make_box(Vec3(1e-3, 2e-3, 0.5e-3)), 2e-3, 8); }

@@ -20,6 +20,7 @@
 //   force   eq. 4.
 #include "sulcus/engine/renderer.h"
 
+#include "capsule_bounds.h"
 #include "ccd.h"
 #include "contact_atoms.h"
 #include "near_cache.h"
@@ -400,71 +401,8 @@ double box_reach(const RendererSettings& S, double tool_radius, const double low
 
 // A lower bound on the distance between a piece with capsules and triangle (a, b, c) of normal n:
 // the least over its capsules of the bounding-sphere bound, raised where a capsule's axis lies
-// wholly on one side of the triangle's plane to its nearer end's height. `nearest` receives the
-// capsule that gave it.
-//
-// The capsules lie end to end along one line, so capsule j is no nearer to the sphere than the gap
-// along that line between the centre's projection and the capsule's stretch, less the radii. The
-// capsule the centre projects into is measured first; a capsule whose gap alone puts it over that
-// (by a nanometre, for rounding) cannot give the least bound nor tie it, and is not measured.
-//
-// The capsules come placed with their chain's line (capsule_line), the same for every triangle
-// measured at one placement.
-struct CapsuleLine {
-    const Vec3* axis = nullptr;  // the capsules' points (kToolCapsules + 1, world)
-    Vec3 chain{0.0};             // from the chain's first point to its last
-    double length = 0.0;         // its length
-    double stretch = 0.0;        // each capsule's share of it
-    double axis_norm[kToolCapsules + 1] = {};  // each point's distance from the origin (m)
-};
-CapsuleLine capsule_line(const ToolPiece& piece, const Vec3* axis) {
-    const Vec3 chain = axis[piece.capsule_count] - axis[0];
-    const double length = glm::length(chain);
-    CapsuleLine line{axis, chain, length, length / piece.capsule_count};
-    for (int j = 0; j <= piece.capsule_count; ++j) line.axis_norm[j] = glm::length(axis[j]);
-    return line;
-}
-
-// The least over the piece's capsules of capsule(j) for a triangle of bounding sphere ts, where
-// capsule(j) is at least the sphere's bound against capsule j: the capsule the centre projects
-// into first, then only those whose gap along the chain, less the radii, comes under what that
-// one gave (by a nanometre, for rounding). `nearest` receives the capsule that gave it.
-// With Count > 0 the piece has that many capsules (the loop then unrolls), else
-// piece.capsule_count.
-template <int Count, class Capsule>
-double least_over_capsules_of(const ToolPiece& piece, const CapsuleLine& line, const TriangleSphere& ts,
-                              Capsule&& capsule, int& nearest) {
-    const Vec3* axis = line.axis;
-    const int count = Count > 0 ? Count : piece.capsule_count;
-    const double length = line.length, stretch = line.stretch;
-    const double along = length > 0.0 ? glm::dot(ts.centre - axis[0], line.chain) / length : 0.0;
-    auto gap_bound = [&](int j) {
-        const double gap = std::max(std::max(0.0, j * stretch - along), along - (j + 1) * stretch);
-        return gap - ts.radius - piece.capsule_radii_m[size_t(j)];
-    };
-    const int first = stretch > 0.0 ? std::clamp(int(std::floor(along / stretch)), 0, count - 1) : 0;
-    const double first_bound = capsule(first);
-    double bound = 1e300;
-    nearest = 0;
-    for (int j = 0; j < count; ++j) {
-        if (j != first && gap_bound(j) >= first_bound + 1e-9) continue;
-        const double bj = j == first ? first_bound : capsule(j);
-        if (bj < bound) {
-            bound = bj;
-            nearest = j;
-        }
-    }
-    return bound;
-}
-template <class Capsule>
-double least_over_capsules(const ToolPiece& piece, const CapsuleLine& line, const TriangleSphere& ts,
-                           Capsule&& capsule, int& nearest) {
-    // A long piece has kToolCapsules of them (ToolPiece::capsule_count).
-    if (piece.capsule_count == kToolCapsules)
-        return least_over_capsules_of<kToolCapsules>(piece, line, ts, capsule, nearest);
-    return least_over_capsules_of<0>(piece, line, ts, capsule, nearest);
-}
-
+// wholly on one side of the triangle's plane to its nearer end's height (least_over_capsules).
+// `nearest` receives the capsule that gave it.
 double piece_capsule_bound(const ToolPiece& piece, const CapsuleLine& line, const Vec3& a, const TriangleSphere& ts,
                            const Vec3& n, int& nearest) {
     const Vec3* axis = line.axis;
@@ -476,30 +414,6 @@ double piece_capsule_bound(const ToolPiece& piece, const CapsuleLine& line, cons
         return bj;
     };
     return least_over_capsules(piece, line, ts, capsule, nearest);
-}
-
-// A lower bound on the separation of a piece and a triangle (a, b, e) of a compliant object, which
-// the tool may be inside: where the capsules' tangent bounds (capsule_tangent_lower) put the
-// triangle clear of every capsule, the least of them (the distance, which is the separation where
-// they are apart); else the least over the capsules of the sphere's bound (capsule_sphere_lower),
-// which bounds how deep they overlap as well.
-double piece_compliant_bound(const ToolPiece& piece, const CapsuleLine& line, const TriangleSphere& ts, const Vec3& a,
-                             const Vec3& b, const Vec3& e) {
-    int nearest = 0;
-    const double apart = least_over_capsules(
-        piece, line, ts,
-        [&](int j) {
-            return capsule_tangent_lower(line.axis[j], line.axis_norm[j], line.axis[j + 1],
-                                         piece.capsule_radii_m[size_t(j)], ts, a, b, e);
-        },
-        nearest);
-    if (apart > 0.0) return apart;
-    return least_over_capsules(
-        piece, line, ts,
-        [&](int j) {
-            return capsule_sphere_lower(line.axis[j], line.axis[j + 1], piece.capsule_radii_m[size_t(j)], ts);
-        },
-        nearest);
 }
 
 // The least over a piece's tapered capsules (ToolPiece::taper_radii_m) of their tangent bound on
@@ -843,17 +757,62 @@ double inside_reach(const Model& model, const SoftDepths& soft, uint16_t o, doub
     // A picometre under, for the rounding of the sums.
     const double since = c.moved + 1e-12;
     const std::vector<uint32_t>& order = obj.bvh.order();
+#if defined(__AVX2__)
+    // The triangles whose bounds are to be measured, four at a time: each is pushed at once, its
+    // bound filled in (and kept) when its four are measured.
+    int waiting = 0;
+    uint32_t wait_tri[4];
+    int wait_near[4], wait_slot[4];
+    auto measure = [&] {
+        if (waiting == 4) {
+            const TriangleSphere* spheres[4];
+            const Vec3* corners[4][3];
+            for (int k = 0; k < 4; ++k) {
+                spheres[k] = &obj.topology.triangle_spheres[wait_tri[k]];
+                const auto& t = obj.mesh.triangles[wait_tri[k]];
+                for (int m = 0; m < 3; ++m) corners[k][m] = &obj.mesh.vertices[t[m]];
+            }
+            double bounds[4];
+            piece_compliant_bound4(piece, line, spheres, corners, bounds);
+            for (int k = 0; k < 4; ++k) {
+                w.near[wait_near[k]].lower_m = bounds[k];
+                c.kept[wait_slot[k]] = bounds[k] + c.moved;
+            }
+        } else {
+            for (int k = 0; k < waiting; ++k) {
+                const double bound = bound_of(wait_tri[k]);
+                w.near[wait_near[k]].lower_m = bound;
+                c.kept[wait_slot[k]] = bound + c.moved;
+            }
+        }
+        waiting = 0;
+    };
+#endif
     for (int i = 0; i < c.count; ++i) {
         const uint32_t slot = c.slots[i];
         if (!obj.bvh.slot_box(slot).overlaps(b)) continue;
         const uint32_t tri = order[slot];
         double bound = c.kept[i] - since;
+#if defined(__AVX2__)
+        if (keep && !(bound > beyond) && w.near_count < kMaxNear) {
+            wait_tri[waiting] = tri;
+            wait_near[waiting] = w.near_count;
+            wait_slot[waiting++] = i;
+            const bool more = push(tri, 0.0);
+            if (waiting == 4 || !more) measure();
+            if (!more) break;
+            continue;
+        }
+#endif
         if (!keep || !(bound > beyond)) {
             bound = bound_of(tri);
             c.kept[i] = bound + c.moved;
         }
         if (!push(tri, bound)) break;
     }
+#if defined(__AVX2__)
+    measure();
+#endif
     return !overflow;
 }
 
