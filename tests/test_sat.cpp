@@ -146,6 +146,41 @@ TEST(FastSat, TriangleTableGivesTheEdgeByEdgeAnswerToTheBit) {
     table_matches_edge_by_edge(make_probe_tip_collision(ProbeKind::Nabers), 1e-3, 2000, 13);
 }
 
+// Four face normals and four table rows at a time (AVX2) give the one-at-a-time answer to the bit:
+// the same separation, axis, kind and index, over answers of every kind.
+void four_at_a_time_match(const TriMesh& tool_mesh, double scale, int trials, unsigned seed) {
+    PlacedTool pt(tool_mesh);
+    ASSERT_TRUE(pt.mb.model) << pt.mb.error;
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int kinds[3] = {0, 0, 0};
+    for (int t = 0; t < trials; ++t) {
+        place_at_random(pt, rng, u, scale);
+        const ConvexView view = pt.view(true);
+        ASSERT_GE(view.face_count, 4);
+        ASSERT_GE(view.triangle_count, 4);
+        Vec3 a, b, d;
+        triangle_near_vertex(pt, rng, u, scale, a, b, d);
+        const SatResult r4 = separate_convex_triangle(view, a, b, d, true);
+        const SatResult r1 = separate_convex_triangle(view, a, b, d, false);
+        ASSERT_EQ(std::memcmp(&r4.separation, &r1.separation, sizeof(double)), 0) << "trial " << t;
+        ASSERT_EQ(std::memcmp(&r4.axis, &r1.axis, sizeof(Vec3)), 0) << "trial " << t;
+        ASSERT_EQ(r4.kind, r1.kind) << "trial " << t;
+        ASSERT_EQ(r4.index, r1.index) << "trial " << t;
+        ++kinds[r1.kind];
+    }
+    // The triangle's normal, face normals and edge pairs each decided some of the answers.
+    EXPECT_GT(kinds[0], trials / 20);
+    EXPECT_GT(kinds[1], trials / 20);
+    EXPECT_GT(kinds[2], trials / 20);
+}
+
+TEST(FastSat, FourAtATimeGivesTheOneAtATimeAnswerToTheBit) {
+    four_at_a_time_match(make_box(Vec3(1e-3, 2e-3, 0.5e-3)), 2e-3, 2000, 21);
+    four_at_a_time_match(make_probe_tip_collision(ProbeKind::Williams), 1e-3, 2000, 22);
+    four_at_a_time_match(make_probe_tip_collision(ProbeKind::Nabers), 1e-3, 2000, 23);
+}
+
 // The guard takes the gap along one axis (the triangle's normal, the axis a pair's last test
 // found) for the separation where it is enough: it must never exceed the separation, and along
 // the test's own axis it must give the separation back.

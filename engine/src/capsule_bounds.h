@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "geometry.h"
+#include "lanes.h"
 #include "sulcus/engine/mesh.h"
 #include "sulcus/engine/renderer.h"
 
@@ -101,15 +102,6 @@ inline double piece_compliant_bound(const ToolPiece& piece, const CapsuleLine& l
 }
 
 #if defined(__AVX2__)
-// Four lanes of doubles, with std::min and std::max as the scalar code takes them (the second
-// where it is less, or greater; else the first), so that zeros keep their sign and NaN its place.
-inline __m256d lanes_min(__m256d a, __m256d b) { return _mm256_blendv_pd(a, b, _mm256_cmp_pd(b, a, _CMP_LT_OQ)); }
-inline __m256d lanes_max(__m256d a, __m256d b) { return _mm256_blendv_pd(a, b, _mm256_cmp_pd(a, b, _CMP_LT_OQ)); }
-inline __m256d lanes_dot(__m256d x1, __m256d y1, __m256d z1, __m256d x2, __m256d y2, __m256d z2) {
-    return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x1, x2), _mm256_mul_pd(y1, y2)), _mm256_mul_pd(z1, z2));
-}
-inline __m256d lanes_of(double v) { return _mm256_set1_pd(v); }
-
 // piece_compliant_bound of four triangles at once (triangle k: bounding sphere ts[k], corners
 // v[k][0, 3)), into bounds[0, 4): every capsule's bounds taken for every triangle, and the least
 // over the capsules taken as least_over_capsules_of takes it (the same capsules, in the same

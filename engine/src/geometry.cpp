@@ -1,4 +1,5 @@
 #include "geometry.h"
+#include "lanes.h"
 
 #include <algorithm>
 #include <cmath>
@@ -68,15 +69,57 @@ inline double extent_gap(double pmin, double pmax, const Vec3& n, const Vec3& a,
     return std::max(pos, neg);
 }
 
-// Separation along unit axis n (extent_gap), the polytope's extent by looking at every vertex.
-inline double axis_separation(const ConvexView& poly, const Vec3& n, const Vec3& a, const Vec3& b, const Vec3& c,
-                              double& sign) {
-    double pmin = 1e300, pmax = -1e300;
+// The polytope's extent [pmin, pmax] along n, by looking at every vertex.
+inline void extent_along(const ConvexView& poly, const Vec3& n, double& pmin, double& pmax) {
+    pmin = 1e300;
+    pmax = -1e300;
     for (int i = 0; i < poly.vertex_count; ++i) {
         const double v = glm::dot(n, poly.vertices[i]);
         pmin = std::min(pmin, v);
         pmax = std::max(pmax, v);
     }
+}
+
+// extent_along with four vertices at a time, where that gives its answer to the bit: the products
+// are the same, and the least and greatest of a set of numbers do not depend on the order they
+// are taken in, except for the sign of a zero (then false, and the caller looks one at a time).
+inline bool extent_four_at_a_time(const ConvexView& poly, const Vec3& n, double& pmin, double& pmax) {
+#if defined(__AVX2__)
+    const __m256d nx = lanes_of(n.x), ny = lanes_of(n.y), nz = lanes_of(n.z);
+    __m256d lo = lanes_of(1e300), hi = lanes_of(-1e300);
+    int i = 0;
+    for (; i + 4 <= poly.vertex_count; i += 4) {
+        __m256d x, y, z;
+        lanes_of_vectors(poly.vertices + i, x, y, z);
+        const __m256d v = lanes_dot(nx, ny, nz, x, y, z);
+        lo = lanes_min(lo, v);
+        hi = lanes_max(hi, v);
+    }
+    alignas(32) double l[4], h[4];
+    _mm256_store_pd(l, lo);
+    _mm256_store_pd(h, hi);
+    pmin = std::min(std::min(l[0], l[1]), std::min(l[2], l[3]));
+    pmax = std::max(std::max(h[0], h[1]), std::max(h[2], h[3]));
+    for (; i < poly.vertex_count; ++i) {
+        const double v = glm::dot(n, poly.vertices[i]);
+        pmin = std::min(pmin, v);
+        pmax = std::max(pmax, v);
+    }
+    return pmin != 0.0 && pmax != 0.0;
+#else
+    (void)poly;
+    (void)n;
+    (void)pmin;
+    (void)pmax;
+    return false;
+#endif
+}
+
+// Separation along unit axis n (extent_gap), the polytope's extent by looking at every vertex.
+inline double axis_separation(const ConvexView& poly, const Vec3& n, const Vec3& a, const Vec3& b, const Vec3& c,
+                              double& sign) {
+    double pmin, pmax;
+    extent_along(poly, n, pmin, pmax);
     return extent_gap(pmin, pmax, n, a, b, c, sign);
 }
 
@@ -114,7 +157,9 @@ bool vertex_deep_inside(const ConvexView& poly, const Vec3& a, const Vec3& b, co
     return false;
 }
 
-SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c) {
+SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c,
+                                   bool four_at_a_time) {
+    (void)four_at_a_time;  // without AVX2, one at a time
     SatResult best;
     best.separation = -1e300;
     auto keep = [&](double s, double sign, const Vec3& axis, int kind, int index) {
@@ -132,9 +177,38 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
     };
     const Vec3 tn = glm::cross(b - a, c - a);
     const double tl = glm::length(tn);
-    if (tl > 0.0) consider(tn / tl, 0, 0);
+    if (tl > 0.0) {
+        const Vec3 axis = tn / tl;
+        double sign = 1.0;
+        double pmin, pmax;
+        if (!(four_at_a_time && extent_four_at_a_time(poly, axis, pmin, pmax))) extent_along(poly, axis, pmin, pmax);
+        keep(extent_gap(pmin, pmax, axis, a, b, c, sign), sign, axis, 0, 0);
+    }
     const bool fast = poly.depths && poly.edge_normals && poly.rotation;
-    for (int f = 0; f < poly.face_count; ++f) {
+    int f = 0;
+#if defined(__AVX2__)
+    // Four faces at a time: extent_gap's operations in its order, the gaps kept in face order.
+    if (fast && four_at_a_time) {
+        const __m256d ax = lanes_of(a.x), ay = lanes_of(a.y), az = lanes_of(a.z);
+        const __m256d bx = lanes_of(b.x), by = lanes_of(b.y), bz = lanes_of(b.z);
+        const __m256d cx = lanes_of(c.x), cy = lanes_of(c.y), cz = lanes_of(c.z);
+        for (; f + 4 <= poly.face_count; f += 4) {
+            __m256d nx, ny, nz;
+            lanes_of_vectors(poly.normals + f, nx, ny, nz);
+            const __m256d pmax = _mm256_loadu_pd(poly.offsets + f);
+            const __m256d pmin = _mm256_sub_pd(pmax, _mm256_loadu_pd(poly.depths + f));
+            const __m256d ta = lanes_dot(nx, ny, nz, ax, ay, az), tb = lanes_dot(nx, ny, nz, bx, by, bz),
+                          tc = lanes_dot(nx, ny, nz, cx, cy, cz);
+            const __m256d tmin = lanes_min(ta, lanes_min(tb, tc)), tmax = lanes_max(ta, lanes_max(tb, tc));
+            const __m256d pos = _mm256_sub_pd(pmin, tmax), neg = _mm256_sub_pd(tmin, pmax);
+            const int positive = _mm256_movemask_pd(_mm256_cmp_pd(pos, neg, _CMP_GE_OQ));
+            alignas(32) double s[4];
+            _mm256_store_pd(s, lanes_max(pos, neg));
+            for (int j = 0; j < 4; ++j) keep(s[j], (positive >> j & 1) ? 1.0 : -1.0, poly.normals[f + j], 1, f + j);
+        }
+    }
+#endif
+    for (; f < poly.face_count; ++f) {
         if (!fast) {
             consider(poly.normals[f], 1, f);
             continue;
@@ -194,10 +268,48 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
     // Where the polytope's triangles fit the table, each triangle normal's dot product with the
     // triangle's edge (the same products as taken edge by edge) and its side are taken once for
     // every polytope edge at it.
-    constexpr int kTableTriangles = 256;
-    const bool table = poly.triangle_normals && poly.edge_triangles && poly.triangle_count <= kTableTriangles;
-    double along[kTableTriangles];
-    uint8_t side[kTableTriangles];
+    constexpr int kTableTriangles = 256, kTableEdges = 3 * kTableTriangles / 2;
+    const bool table = poly.triangle_normals && poly.edge_triangles && poly.triangle_count <= kTableTriangles &&
+                       poly.edge_count <= kTableEdges;
+    // along[k][t]: triangle t's normal along the triangle's edge k; sides[t], bits 2k and 2k + 1:
+    // above the tolerance, below it; shared[e]: the bits the two triangles at edge e share (both
+    // above or both below: the arcs do not cross), padded with ones to whole registers.
+    double along[3][kTableTriangles];
+    uint8_t sides[kTableTriangles];
+    alignas(32) uint8_t shared[kTableEdges + 32];
+    if (table) {
+        const double tol[3] = {1e-12 * scale_e[0], 1e-12 * scale_e[1], 1e-12 * scale_e[2]};
+        int t = 0;
+#if defined(__AVX2__)
+        // Four triangle normals at a time, against the three edges.
+        for (; four_at_a_time && t + 4 <= poly.triangle_count; t += 4) {
+            __m256d nx, ny, nz;
+            lanes_of_vectors(poly.triangle_normals + t, nx, ny, nz);
+            int bits[4] = {0, 0, 0, 0};
+            for (int k = 0; k < 3; ++k) {
+                const __m256d d =
+                    lanes_dot(nx, ny, nz, lanes_of(e_local[k].x), lanes_of(e_local[k].y), lanes_of(e_local[k].z));
+                _mm256_storeu_pd(along[k] + t, d);
+                const int above = _mm256_movemask_pd(_mm256_cmp_pd(d, lanes_of(tol[k]), _CMP_GT_OQ));
+                const int below = _mm256_movemask_pd(_mm256_cmp_pd(d, lanes_of(-tol[k]), _CMP_LT_OQ));
+                for (int j = 0; j < 4; ++j) bits[j] |= ((above >> j & 1) | (below >> j & 1) << 1) << 2 * k;
+            }
+            for (int j = 0; j < 4; ++j) sides[t + j] = uint8_t(bits[j]);
+        }
+#endif
+        for (; t < poly.triangle_count; ++t) {
+            int bits = 0;
+            for (int k = 0; k < 3; ++k) {
+                const double d = glm::dot(poly.triangle_normals[t], e_local[k]);
+                along[k][t] = d;
+                bits |= ((d > tol[k] ? 1 : 0) | (d < -tol[k] ? 2 : 0)) << 2 * k;
+            }
+            sides[t] = uint8_t(bits);
+        }
+        for (int e = 0; e < poly.edge_count; ++e)
+            shared[e] = sides[poly.edge_triangles[e][0]] & sides[poly.edge_triangles[e][1]];
+        std::fill(shared + poly.edge_count, shared + ((poly.edge_count + 31) & ~31), uint8_t(0xff));
+    }
     for (int k = 0; k < 3; ++k) {
         const double tol = 1e-12 * scale_e[k];
         const double out_length = glm::length(out_local[k]);
@@ -210,17 +322,24 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
             }
             continue;
         }
-        for (int t = 0; t < poly.triangle_count; ++t) {
-            const double d = glm::dot(poly.triangle_normals[t], e_local[k]);
-            along[t] = d;
-            side[t] = uint8_t((d > tol ? 1 : 0) | (d < -tol ? 2 : 0));
+        auto open = [&](int e) {
+            arcs_cross(k, e, along[k][poly.edge_triangles[e][0]], along[k][poly.edge_triangles[e][1]], out_length);
+        };
+        int e = 0;
+#if defined(__AVX2__)
+        // Thirty-two edges at a time: those whose triangles share no side, in their order.
+        if (four_at_a_time) {
+            const __m256i side_k = _mm256_set1_epi8(char(3 << 2 * k)), zero = _mm256_setzero_si256();
+            for (; e < poly.edge_count; e += 32) {
+                const __m256i m = _mm256_load_si256(reinterpret_cast<const __m256i*>(shared + e));
+                uint32_t crossing =
+                    uint32_t(_mm256_movemask_epi8(_mm256_cmpeq_epi8(_mm256_and_si256(m, side_k), zero)));
+                for (; crossing != 0; crossing &= crossing - 1) open(e + __builtin_ctz(crossing));
+            }
         }
-        for (int e = 0; e < poly.edge_count; ++e) {
-            const uint32_t t0 = poly.edge_triangles[e][0], t1 = poly.edge_triangles[e][1];
-            // Both above the tolerance or both below it.
-            if (side[t0] & side[t1]) continue;
-            arcs_cross(k, e, along[t0], along[t1], out_length);
-        }
+#endif
+        for (; e < poly.edge_count; ++e)
+            if (!(shared[e] >> 2 * k & 3)) open(e);
     }
     return best;
 }

@@ -324,7 +324,10 @@ struct SatResult {
     int kind = 0;   // 0 triangle normal, 1 polytope face, 2 edge pair
     int index = 0;  // face index (kind 1), or tri_edge * edge_count + poly_edge (kind 2)
 };
-SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c);
+// With AVX2 the fast test takes the face normals and the table four at a time, the scalar code's
+// operations in its order: the same answer to the bit as `four_at_a_time = false`.
+SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c,
+                                   bool four_at_a_time = true);
 // The gap between the polytope and triangle (a, b, c) along unit axis n, the larger of its two
 // orientations (< 0: overlap along n). No more than their separation where they overlap (the
 // least overlap over all axes), nor than their distance where they are apart.

@@ -1,0 +1,38 @@
+// Four lanes of doubles (AVX2) that take the scalar code's operations in its order, so that a
+// loop run four at a time gives the scalar loop's answers to the bit (the build does not
+// contract products and sums).
+#pragma once
+
+#if defined(__AVX2__)
+#include <immintrin.h>
+
+#include "sulcus/engine/types.h"
+
+namespace sulcus {
+
+// std::min and std::max as the scalar code takes them (the second where it is less, or greater;
+// else the first), so that zeros keep their sign and NaN its place.
+inline __m256d lanes_min(__m256d a, __m256d b) { return _mm256_blendv_pd(a, b, _mm256_cmp_pd(b, a, _CMP_LT_OQ)); }
+inline __m256d lanes_max(__m256d a, __m256d b) { return _mm256_blendv_pd(a, b, _mm256_cmp_pd(a, b, _CMP_LT_OQ)); }
+// glm::dot: (x1 x2 + y1 y2) + z1 z2.
+inline __m256d lanes_dot(__m256d x1, __m256d y1, __m256d z1, __m256d x2, __m256d y2, __m256d z2) {
+    return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x1, x2), _mm256_mul_pd(y1, y2)), _mm256_mul_pd(z1, z2));
+}
+inline __m256d lanes_of(double v) { return _mm256_set1_pd(v); }
+
+// Four consecutive vectors (v[0, 4)) as one register per coordinate.
+inline void lanes_of_vectors(const Vec3* v, __m256d& x, __m256d& y, __m256d& z) {
+    static_assert(sizeof(Vec3) == 3 * sizeof(double), "a vector is three doubles, packed");
+    const double* p = &v[0].x;
+    // r0 = (x0 y0)(z0 x1), r1 = (y1 z1)(x2 y2), r2 = (z2 x3)(y3 z3), in 128-bit halves.
+    const __m256d r0 = _mm256_loadu_pd(p), r1 = _mm256_loadu_pd(p + 4), r2 = _mm256_loadu_pd(p + 8);
+    const __m256d zx = _mm256_permute2f128_pd(r0, r2, 0x21);  // (z0 x1)(z2 x3)
+    const __m256d xy = _mm256_permute2f128_pd(r0, r1, 0x30);  // (x0 y0)(x2 y2)
+    const __m256d yz = _mm256_permute2f128_pd(r1, r2, 0x30);  // (y1 z1)(y3 z3)
+    x = _mm256_shuffle_pd(xy, zx, 0xA);
+    y = _mm256_shuffle_pd(xy, yz, 0x5);
+    z = _mm256_shuffle_pd(zx, yz, 0xA);
+}
+
+}  // namespace sulcus
+#endif
