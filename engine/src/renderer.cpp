@@ -2706,14 +2706,23 @@ double feature_distance(const Model& model, const Atom& a, const ToolPoseAt& at,
             return closest_on_triangle(v, tool.mesh.vertices[t[0]], tool.mesh.vertices[t[1]],
                                        tool.mesh.vertices[t[2]]).distance;
         };
+        // A triangle whose plane is further from the vertex than the least distance so far is no
+        // nearer: passed over, the least stays the same (and `enough` already said no to it). The
+        // margin, 1e-13 m and 1e-9 of the distance, is some thousand times the rounding of either
+        // distance in the tool's frame.
+        auto further = [&](size_t t) {
+            const Vec3& t0 = tool.mesh.vertices[tool.mesh.triangles[t][0]];
+            return std::abs(glm::dot(tool.topology.triangle_normals[t], v - t0)) > d + 1e-9 * d + 1e-13;
+        };
         const Vec3& fn = tool.face_normals[a.tool_face];
         const size_t n = tool.mesh.triangles.size();
         for (size_t t = 0; t < n; ++t)
-            if (glm::dot(tool.topology.triangle_normals[t], fn) > 1.0 - 1e-9) {
+            if (glm::dot(tool.topology.triangle_normals[t], fn) > 1.0 - 1e-9 && !further(t)) {
                 d = std::min(d, to_triangle(tool.mesh.triangles[t]));
                 if (enough(d)) return d;
             }
         for (size_t t = 0; t < n; ++t) {
+            if (further(t)) continue;
             d = std::min(d, to_triangle(tool.mesh.triangles[t]));
             if (enough(d)) return d;
         }
