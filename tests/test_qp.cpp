@@ -742,6 +742,58 @@ TEST(Qp, RandomProblemsOfEverySizeMatchReference) {
     }
 }
 
+// The paths compiled for sizes 6 to 10 give the any-size path's answer to the bit, on problems of
+// the step's shape (pose rows sinking in by slacks) and on generic ones, cold and warm started.
+TEST(Qp, SizedPathsGiveTheAnySizeAnswerToTheBit) {
+    Rng rng(0x5eed0103);
+    for (int n = kPoseVars; n <= kPoseVars + 4; ++n) {
+        int optimal = 0, warm_used = 0;
+        for (int k = 0; k < 300; ++k) {
+            auto p = empty_problem(n);
+            random_weights(rng, *p);
+            random_target(rng, *p);
+            const bool slacks = k % 2 == 0 && n > kPoseVars;
+            if (slacks) {
+                for (int j = kPoseVars; j < n; ++j) {
+                    p->weight[j] = std::pow(10.0, rng.uniform(-2, 3));
+                    p->target[j] = 0;
+                    p->lower[j] = 0;
+                    if (rng.chance(0.5)) p->upper[j] = rng.uniform(0, 1) / std::sqrt(p->weight[j]);
+                }
+            }
+            const int rows = rng.integer(1, 12);
+            for (int i = 0; i < rows; ++i) {
+                if (slacks) {
+                    random_normal(rng, p->a[i], kPoseVars);
+                    for (int j = kPoseVars; j < n; ++j) p->a[i][j] = 0;
+                    if (rng.chance(0.7)) p->a[i][rng.integer(kPoseVars, n - 1)] = 1;
+                    p->b[i] = dot(p->a[i], p->target, n) + rng.uniform(-0.3, 1.0);
+                    p->rows = i + 1;
+                } else {
+                    add_random_row(rng, *p);
+                }
+            }
+            if (!slacks) random_box(rng, *p, 12 - rows);
+            Solution sized, any;
+            const Status st = solve(*p, Settings{}, nullptr, sized);
+            ASSERT_EQ(solve_any_size(*p, Settings{}, nullptr, any), st) << n << " #" << k;
+            EXPECT_TRUE(same_bits(sized, any)) << n << " #" << k;
+            optimal += st == Status::Optimal;
+            // Warm started from the answer's active set.
+            WarmStart warm;
+            warm.count = std::min(sized.active_count, kMaxVars);
+            for (int i = 0; i < warm.count; ++i) warm.active[i] = sized.active[i];
+            warm_used += warm.count > 0;
+            Solution sized_warm, any_warm;
+            solve(*p, Settings{}, &warm, sized_warm);
+            solve_any_size(*p, Settings{}, &warm, any_warm);
+            EXPECT_TRUE(same_bits(sized_warm, any_warm)) << n << " #" << k << " warm";
+        }
+        EXPECT_GT(optimal, 100) << n;
+        EXPECT_GT(warm_used, 50) << n;
+    }
+}
+
 // The shape the step builds: pose rows that may sink in by a slack s_k >= 0 (weight k_k,
 // target 0, sometimes capped), a_pose . x + s_k >= b; several rows may share a slack.
 TEST(Qp, RandomSlackProblemsMatchReference) {

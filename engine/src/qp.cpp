@@ -532,7 +532,25 @@ Status solve(const Problem& problem, const Settings& settings, const WarmStart* 
         out.status = Status::InvalidInput;
         return out.status;
     }
-    if (problem.vars == kPoseVars) return solve_n<kPoseVars>(problem, settings, warm, out);
+    // A path compiled for each size up to the pose and four springs (the tissue's zones: the
+    // bench's two-region session solves 8 and 9 variables); the same operations in the same order
+    // at every size, so the same answer to the bit.
+    switch (problem.vars) {
+        case kPoseVars: return solve_n<kPoseVars>(problem, settings, warm, out);
+        case kPoseVars + 1: return solve_n<kPoseVars + 1>(problem, settings, warm, out);
+        case kPoseVars + 2: return solve_n<kPoseVars + 2>(problem, settings, warm, out);
+        case kPoseVars + 3: return solve_n<kPoseVars + 3>(problem, settings, warm, out);
+        case kPoseVars + 4: return solve_n<kPoseVars + 4>(problem, settings, warm, out);
+        default: return solve_n<0>(problem, settings, warm, out);
+    }
+}
+
+Status solve_any_size(const Problem& problem, const Settings& settings, const WarmStart* warm, Solution& out) {
+    if (!valid_sizes(problem, settings, warm)) {
+        out = Solution{};
+        out.status = Status::InvalidInput;
+        return out.status;
+    }
     return solve_n<0>(problem, settings, warm, out);
 }
 

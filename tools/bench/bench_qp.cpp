@@ -1,6 +1,8 @@
 // Time of one qp::solve on servo-like problems: 6 variables, 8 / 24 / 64 rows, the haptic weight
 // pattern (translation 1, rotation 1e-4) and a local-solution box, from a fixed-seed generator;
-// and the same problems with 10 slack variables added (compliant contacts, 16 variables).
+// and the same problems with 10 slack variables added (compliant contacts, 16 variables), or with
+// 2 and 3 (the tissue session's 8 and 9 variables), on the path compiled for their size and on
+// the path for any size (qp::solve_any_size: the same answers).
 //
 //   bench_qp [google benchmark flags]   per-solve time via Google Benchmark
 //   bench_qp --stats                    median, p99 and max over 100000 solves (steady_clock)
@@ -102,21 +104,21 @@ void BM_SolveWarm(benchmark::State& state) {
 }
 BENCHMARK(BM_SolveWarm)->Arg(8)->Arg(24)->Arg(64);
 
-// The pose problems with every row made compliant: kMaxVars - kPoseVars slacks (weight 10, a
+// The pose problems with every row made compliant: `slacks` slack variables (weight 10, a
 // stiffer spring than the pose's, box [0, inf)), row i sinking by slack i mod their count.
-std::vector<std::unique_ptr<Problem>> make_slack_pool(int rows, uint64_t seed) {
+std::vector<std::unique_ptr<Problem>> make_slack_pool(int rows, uint64_t seed, int slacks = kMaxVars - kPoseVars) {
     auto pool = make_pool(rows, seed);
-    constexpr int slacks = kMaxVars - kPoseVars;
+    const int vars = kPoseVars + slacks;
     for (auto& p : pool) {
-        p->vars = kMaxVars;
-        for (int j = kPoseVars; j < kMaxVars; ++j) {
+        p->vars = vars;
+        for (int j = kPoseVars; j < vars; ++j) {
             p->weight[j] = 10.0;
             p->target[j] = 0.0;
             p->lower[j] = 0.0;
             p->upper[j] = std::numeric_limits<double>::infinity();
         }
         for (int i = 0; i < rows; ++i)
-            for (int j = kPoseVars; j < kMaxVars; ++j)
+            for (int j = kPoseVars; j < vars; ++j)
                 p->a[i][j] = (j - kPoseVars == i % slacks) ? 1.0 : 0.0;
     }
     return pool;
@@ -139,6 +141,23 @@ void BM_SolveSlacks(benchmark::State& state) {
     state.counters["active"] = s.active_count;
 }
 BENCHMARK(BM_SolveSlacks)->Arg(8)->Arg(24)->Arg(64);
+
+// 24 rows with 2 or 3 slacks (8 or 9 variables): range(1) 0 on the path compiled for the size,
+// 1 on the path for any size.
+void BM_SolveTissue(benchmark::State& state) {
+    const auto pool = make_slack_pool(24, 42, static_cast<int>(state.range(0)));
+    const bool any_size = state.range(1) != 0;
+    const Settings settings;
+    Solution s;
+    size_t n = 0;
+    for (auto _ : state) {
+        if (any_size) solve_any_size(*pool[n], settings, nullptr, s);
+        else solve(*pool[n], settings, nullptr, s);
+        benchmark::DoNotOptimize(s);
+        n = (n + 1) % pool.size();
+    }
+}
+BENCHMARK(BM_SolveTissue)->Args({2, 0})->Args({2, 1})->Args({3, 0})->Args({3, 1});
 
 int run_stats() {
     constexpr int kSolves = 100000;

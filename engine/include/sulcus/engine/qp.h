@@ -85,7 +85,13 @@ struct WarmStart {
     int active[kMaxVars] = {};
 };
 
-// Solves the problem. Never allocates, never throws; the result is deterministic.
+// Solves the problem. Never allocates, never throws; the result is deterministic. Sizes up to
+// the pose and four more variables run a path compiled for their size, the rest one for any size;
+// both take the same operations in the same order.
 Status solve(const Problem& problem, const Settings& settings, const WarmStart* warm, Solution& out);
+
+// The path for any size, whatever the problem's: `solve`'s answer to the bit (tests compare the
+// two; the benchmarks time both).
+Status solve_any_size(const Problem& problem, const Settings& settings, const WarmStart* warm, Solution& out);
 
 }  // namespace sulcus::qp
