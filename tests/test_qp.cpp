@@ -742,6 +742,29 @@ TEST(Qp, RandomProblemsOfEverySizeMatchReference) {
     }
 }
 
+// Variables kPoseVars to vars - 1 as the step's slacks: springs (weight 1e-2 to 1e3) at rest at
+// 0, never negative, half of them capped.
+void random_slacks(Rng& rng, Problem& p) {
+    for (int j = kPoseVars; j < p.vars; ++j) {
+        p.weight[j] = std::pow(10.0, rng.uniform(-2, 3));
+        p.target[j] = 0;
+        p.lower[j] = 0;
+        if (rng.chance(0.5)) p.upper[j] = rng.uniform(0, 1) / std::sqrt(p.weight[j]);
+    }
+}
+
+// A pose row that may sink in by one of the slacks, a_pose . x + s_k >= b.
+void add_slack_row(Rng& rng, Problem& p) {
+    const int i = p.rows++;
+    random_normal(rng, p.a[i], kPoseVars);
+    for (int j = kPoseVars; j < p.vars; ++j) p.a[i][j] = 0;
+    // A compliant contact, or else a rigid one.
+    if (rng.chance(0.7)) p.a[i][rng.integer(kPoseVars, p.vars - 1)] = 1;
+    double nn = 0;
+    for (int j = 0; j < kPoseVars; ++j) nn += p.a[i][j] * p.a[i][j] / p.weight[j];
+    p.b[i] = dot(p.a[i], p.target, p.vars) + std::sqrt(nn) * rng.uniform(-0.3, 1.0);
+}
+
 // The paths compiled for sizes 6 to 10 give the any-size path's answer to the bit, on problems of
 // the step's shape (pose rows sinking in by slacks) and on generic ones, cold and warm started.
 TEST(Qp, SizedPathsGiveTheAnySizeAnswerToTheBit) {
@@ -753,25 +776,11 @@ TEST(Qp, SizedPathsGiveTheAnySizeAnswerToTheBit) {
             random_weights(rng, *p);
             random_target(rng, *p);
             const bool slacks = k % 2 == 0 && n > kPoseVars;
-            if (slacks) {
-                for (int j = kPoseVars; j < n; ++j) {
-                    p->weight[j] = std::pow(10.0, rng.uniform(-2, 3));
-                    p->target[j] = 0;
-                    p->lower[j] = 0;
-                    if (rng.chance(0.5)) p->upper[j] = rng.uniform(0, 1) / std::sqrt(p->weight[j]);
-                }
-            }
+            if (slacks) random_slacks(rng, *p);
             const int rows = rng.integer(1, 12);
             for (int i = 0; i < rows; ++i) {
-                if (slacks) {
-                    random_normal(rng, p->a[i], kPoseVars);
-                    for (int j = kPoseVars; j < n; ++j) p->a[i][j] = 0;
-                    if (rng.chance(0.7)) p->a[i][rng.integer(kPoseVars, n - 1)] = 1;
-                    p->b[i] = dot(p->a[i], p->target, n) + rng.uniform(-0.3, 1.0);
-                    p->rows = i + 1;
-                } else {
-                    add_random_row(rng, *p);
-                }
+                if (slacks) add_slack_row(rng, *p);
+                else add_random_row(rng, *p);
             }
             if (!slacks) random_box(rng, *p, 12 - rows);
             Solution sized, any;
@@ -805,23 +814,9 @@ TEST(Qp, RandomSlackProblemsMatchReference) {
         auto p = empty_problem(n);
         random_weights(rng, *p);
         random_target(rng, *p);
-        for (int j = kPoseVars; j < n; ++j) {
-            p->weight[j] = std::pow(10.0, rng.uniform(-2, 3));
-            p->target[j] = 0;
-            p->lower[j] = 0;
-            if (rng.chance(0.5)) p->upper[j] = rng.uniform(0, 1) / std::sqrt(p->weight[j]);
-        }
+        random_slacks(rng, *p);
         const int rows = rng.integer(1, 5);
-        for (int i = 0; i < rows; ++i) {
-            random_normal(rng, p->a[i], kPoseVars);
-            for (int j = kPoseVars; j < n; ++j) p->a[i][j] = 0;
-            // A compliant contact, or else a rigid one.
-            if (rng.chance(0.7)) p->a[i][rng.integer(kPoseVars, n - 1)] = 1;
-            double nn = 0;
-            for (int j = 0; j < kPoseVars; ++j) nn += p->a[i][j] * p->a[i][j] / p->weight[j];
-            p->b[i] = dot(p->a[i], p->target, n) + std::sqrt(nn) * rng.uniform(-0.3, 1.0);
-        }
-        p->rows = rows;
+        for (int i = 0; i < rows; ++i) add_slack_row(rng, *p);
         tally.add(check_problem(*p, "slacks", k));
     }
     EXPECT_GT(tally.optimal, 200);

@@ -277,8 +277,8 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
     double along[3][kTableTriangles];
     uint8_t sides[kTableTriangles];
     alignas(32) uint8_t shared[kTableEdges + 32];
+    const double tol[3] = {1e-12 * scale_e[0], 1e-12 * scale_e[1], 1e-12 * scale_e[2]};
     if (table) {
-        const double tol[3] = {1e-12 * scale_e[0], 1e-12 * scale_e[1], 1e-12 * scale_e[2]};
         int t = 0;
 #if defined(__AVX2__)
         // Four triangle normals at a time, against the three edges.
@@ -311,13 +311,12 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
         std::fill(shared + poly.edge_count, shared + ((poly.edge_count + 31) & ~31), uint8_t(0xff));
     }
     for (int k = 0; k < 3; ++k) {
-        const double tol = 1e-12 * scale_e[k];
         const double out_length = glm::length(out_local[k]);
         if (!table) {
             for (int e = 0; e < poly.edge_count; ++e) {
                 const double al = glm::dot(poly.edge_normals[e][0], e_local[k]);
                 const double be = glm::dot(poly.edge_normals[e][1], e_local[k]);
-                if ((al > tol && be > tol) || (al < -tol && be < -tol)) continue;
+                if ((al > tol[k] && be > tol[k]) || (al < -tol[k] && be < -tol[k])) continue;
                 arcs_cross(k, e, al, be, out_length);
             }
             continue;

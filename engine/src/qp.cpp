@@ -523,15 +523,18 @@ Status solve_n(const Problem& problem, const Settings& settings, const WarmStart
     return status;
 }
 
+// The answer to a problem of invalid sizes.
+Status refuse(Solution& out) {
+    out = Solution{};
+    out.status = Status::InvalidInput;
+    return out.status;
+}
+
 }  // namespace
 
 Status solve(const Problem& problem, const Settings& settings, const WarmStart* warm,
              Solution& out) {
-    if (!valid_sizes(problem, settings, warm)) {
-        out = Solution{};
-        out.status = Status::InvalidInput;
-        return out.status;
-    }
+    if (!valid_sizes(problem, settings, warm)) return refuse(out);
     // A path compiled for each size up to the pose and four springs (the tissue's zones: the
     // bench's two-region session solves 8 and 9 variables); the same operations in the same order
     // at every size, so the same answer to the bit.
@@ -546,11 +549,7 @@ Status solve(const Problem& problem, const Settings& settings, const WarmStart* 
 }
 
 Status solve_any_size(const Problem& problem, const Settings& settings, const WarmStart* warm, Solution& out) {
-    if (!valid_sizes(problem, settings, warm)) {
-        out = Solution{};
-        out.status = Status::InvalidInput;
-        return out.status;
-    }
+    if (!valid_sizes(problem, settings, warm)) return refuse(out);
     return solve_n<0>(problem, settings, warm, out);
 }
 
