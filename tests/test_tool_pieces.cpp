@@ -9,6 +9,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <random>
 #include <set>
 
@@ -150,6 +153,63 @@ TEST(ToolPieces, TheSlabsAcrossTheAxisHoldEveryVertexABallHolds) {
     }
     EXPECT_GT(held, balls / 10);
     EXPECT_GT(left_out, balls);
+}
+
+// The slabs along each piece's axis (ToolPiece::axial_first) find where an axial run starts as
+// std::lower_bound does, for coordinates at, just beside and between the vertices', past both
+// ends, and NaN; say a run is empty only when no vertex lies in it, and say so for most runs
+// beside a long piece; and, for a piece of at most 64 vertices, give a mask with every vertex of
+// the run.
+TEST(ToolPieces, TheSlabsAlongTheAxisFindEveryRunAsASearchWould) {
+    std::vector<TriMesh> tools = {bent_probe()};
+    for (ProbeKind kind : kAllProbeKinds) tools.push_back(make_probe_tip_collision(kind));
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    int runs = 0, said_empty = 0, empty = 0;
+    for (const TriMesh& mesh : tools) {
+        const ModelBuild b = build_model(mesh, {}, RendererSettings{});
+        ASSERT_TRUE(b.model) << b.error;
+        const ModelTool& tool = b.model->tool;
+        for (const ToolPiece& p : tool.pieces) {
+            const double* coords = tool.axial_coords.data() + p.vertex_begin;
+            const int n = int(p.vertex_count);
+            EXPECT_EQ(p.axial_first[0], 0u);
+            EXPECT_EQ(p.axial_first[kAxialCells], uint32_t(n));
+            const double lo = coords[0], hi = coords[n - 1], span = hi - lo;
+            std::vector<double> probes = {lo - span, hi + span, std::numeric_limits<double>::quiet_NaN()};
+            for (int r = 0; r < n; ++r) {
+                probes.push_back(coords[r]);
+                probes.push_back(std::nextafter(coords[r], -1e300));
+                probes.push_back(std::nextafter(coords[r], 1e300));
+            }
+            for (int i = 0; i < 2000; ++i) probes.push_back(lo - 0.1 * span + 1.2 * span * unit(rng));
+            for (double bottom : probes) {
+                const int start = p.axial_run_start(coords, bottom);
+                EXPECT_EQ(start, int(std::lower_bound(coords, coords + n, bottom) - coords)) << "at " << bottom;
+                // Runs as gather asks: a ball's reach along the axis, micrometres to a millimetre.
+                const double top = bottom + 2e-5 * std::pow(50.0, unit(rng));
+                int inside = 0;
+                for (int r = 0; r < n; ++r) inside += coords[r] >= bottom && coords[r] <= top;
+                ++runs;
+                empty += inside == 0;
+                if (p.axial_run_empty(bottom, top)) {
+                    ++said_empty;
+                    EXPECT_EQ(inside, 0) << "run [" << bottom << ", " << top << "] said empty";
+                }
+                if (n <= 64 && !std::isnan(bottom)) {
+                    const uint64_t mask = p.axial_mask(p.axial_cell(bottom), p.axial_cell(top));
+                    for (int r = 0; r < n; ++r) {
+                        if (coords[r] >= bottom && coords[r] <= top) {
+                            EXPECT_TRUE(mask >> r & 1u) << "vertex " << r << " of run [" << bottom << ", " << top << "]";
+                        }
+                    }
+                }
+            }
+        }
+    }
+    // Most empty runs are found so without a search.
+    EXPECT_GT(said_empty, empty / 2);
+    EXPECT_GT(empty, runs / 10);
 }
 
 // A piece certified for it finds the vertex least along a direction by descending along its

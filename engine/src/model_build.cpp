@@ -330,6 +330,19 @@ std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
             tool.axial_vertices.push_back(piece.vertex_begin + v);
             tool.axial_coords.push_back(coord(v));
         }
+        {
+            // The slabs along the axis (ToolPiece::axial_first), from the coordinates the step
+            // compares with.
+            const double* coords = tool.axial_coords.data() + piece.vertex_begin;
+            const size_t n = order.size();
+            piece.axial_lo_m = coords[0];
+            piece.axial_per_m = coords[n - 1] > coords[0] ? kAxialCells / (coords[n - 1] - coords[0]) : 1.0;
+            size_t r = 0;
+            for (int i = 0; i <= kAxialCells; ++i) {
+                while (r < n && piece.axial_cell(coords[r]) < i) ++r;
+                piece.axial_first[size_t(i)] = uint32_t(r);
+            }
+        }
         if (order.size() <= 64) {
             // The slabs across the axis (ToolPiece::cross_range), their bits by axial order.
             const Vec3 a = piece.axis;

@@ -1474,33 +1474,40 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         const double* coords = tool.axial_coords.data() + piece.vertex_begin;
         const uint32_t* order = tool.axial_vertices.data() + piece.vertex_begin;
         const int run_end = int(piece.vertex_count);
-        const int run_lo = int(std::lower_bound(coords, coords + run_end, along - sphere - axial_slack) - coords);
+        const double run_bottom = along - sphere - axial_slack;
         const double run_top = along + sphere + axial_slack;
         // The run's vertices the ball's shadow across the axis may hold, in the run's order: by
         // the slabs for a ball narrow against the piece (ToolPiece::cross_narrow_m), else the
-        // whole run.
+        // whole run. The slabs along the axis the run meets hold every vertex of the run (and a
+        // few past its ends, which the loop passes over).
         const double shadow = sphere + axial_slack;
         const bool by_mask = shadow < piece.cross_narrow_m;
         uint64_t candidates = 0;
+        int run_lo = 0;
         if (by_mask) {
             const Vec3 c = ts.centre - base.position;
             const double cu = glm::dot(cross_world[nt.piece][0], c), cw = glm::dot(cross_world[nt.piece][1], c);
-            if (std::isfinite(cu) && std::isfinite(cw)) {
+            if (std::isfinite(cu) && std::isfinite(cw) && std::isfinite(along)) {
                 const int i0 = piece.cross_cell(0, cu - shadow), i1 = piece.cross_cell(0, cu + shadow);
                 const int j0 = piece.cross_cell(1, cw - shadow), j1 = piece.cross_cell(1, cw + shadow);
                 candidates = piece.cross_range[0][size_t(i0 * kCrossCells + i1)] &
-                             piece.cross_range[1][size_t(j0 * kCrossCells + j1)];
+                             piece.cross_range[1][size_t(j0 * kCrossCells + j1)] &
+                             piece.axial_mask(piece.axial_cell(run_bottom), piece.axial_cell(run_top));
             } else {
-                candidates = ~uint64_t(0);
+                candidates = piece.axial_mask(0, kAxialCells - 1);  // every vertex of the piece
             }
-            if (run_lo < 64) candidates &= ~((uint64_t(1) << run_lo) - 1);
-            else candidates = 0;
+        } else {
+            // Most runs hold no vertex (the ball is beside the piece's long faces): their slabs
+            // say so.
+            if (piece.axial_run_empty(run_bottom, run_top)) continue;
+            run_lo = piece.axial_run_start(coords, run_bottom);
         }
         for (int r = run_lo; by_mask ? candidates != 0 : r < run_end && coords[r] <= run_top; ++r) {
             if (by_mask) {
                 r = __builtin_ctzll(candidates);
                 if (coords[r] > run_top) break;  // past the run's end, as every later one
                 candidates &= candidates - 1;
+                if (coords[r] < run_bottom) continue;  // before the run's start
             }
             const int a = int(order[r]);
             const double plane = glm::dot(n, w.tool_world[a] - p0);

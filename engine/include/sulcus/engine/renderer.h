@@ -12,6 +12,8 @@
 #include "sulcus/engine/scene_file.h"
 #include "sulcus/engine/types.h"
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -132,6 +134,8 @@ struct ModelObject {
 inline constexpr int kToolCapsules = 4;
 // Slabs along each of a piece's two directions across its axis (ToolPiece::cross_range).
 inline constexpr int kCrossCells = 16;
+// Slabs along a piece's axis (ToolPiece::axial_first).
+inline constexpr int kAxialCells = 64;
 // Pieces a tool may have (the step keeps per-piece scratch of this size).
 inline constexpr int kMaxToolPieces = 16;
 
@@ -190,6 +194,39 @@ struct ToolPiece {
     int cross_cell(int k, double c) const {
         const double x = (c - cross_lo_m[size_t(k)]) * cross_per_m[size_t(k)];
         return !(x >= 1.0) ? 0 : x >= kCrossCells - 1 ? kCrossCells - 1 : int(x);
+    }
+    // Along the axis: kAxialCells slabs over the vertices' axial coordinates (the lowest at
+    // axial_lo_m, each 1 / axial_per_m thick). The vertices in slabs i0 to i1 are the r-th along
+    // the axis for r in [axial_first[i0], axial_first[i1 + 1]): where an axial run starts, and
+    // whether it holds any vertex at all, by look-ups instead of a search.
+    double axial_lo_m = 0.0, axial_per_m = 1.0;
+    std::array<uint32_t, kAxialCells + 1> axial_first{};
+    // The slab along the axis of axial coordinate c (m), clamped to the slabs; monotonic in c.
+    int axial_cell(double c) const {
+        const double x = (c - axial_lo_m) * axial_per_m;
+        return !(x >= 1.0) ? 0 : x >= kAxialCells - 1 ? kAxialCells - 1 : int(x);
+    }
+    // Where the run of axial coordinates from `bottom` starts: the first r with
+    // !(coords[r] < bottom), as std::lower_bound over the piece's coordinates `coords` (its
+    // ModelTool::axial_coords) finds it, searching only bottom's slab.
+    int axial_run_start(const double* coords, double bottom) const {
+        const int cell = axial_cell(bottom);
+        const int lo = int(axial_first[size_t(cell)]), hi = int(axial_first[size_t(cell + 1)]);
+        if (lo == hi || !(coords[lo] < bottom)) return lo;
+        if (coords[hi - 1] < bottom) return hi;
+        return int(std::lower_bound(coords + lo, coords + hi, bottom) - coords);
+    }
+    // True when no vertex has an axial coordinate in [bottom, top]: the slabs between theirs
+    // hold none (false decides nothing).
+    bool axial_run_empty(double bottom, double top) const {
+        return axial_first[size_t(axial_cell(bottom))] == axial_first[size_t(axial_cell(top) + 1)];
+    }
+    // The bits of the vertices in slabs i0 to i1 (i0 <= i1), for a piece of at most 64.
+    uint64_t axial_mask(int i0, int i1) const {
+        const uint32_t a = axial_first[size_t(i0)], b = axial_first[size_t(i1 + 1)];
+        const uint64_t below_b = b >= 64 ? ~uint64_t(0) : (uint64_t(1) << b) - 1;
+        const uint64_t below_a = a >= 64 ? ~uint64_t(0) : (uint64_t(1) << a) - 1;
+        return below_b & ~below_a;
     }
     // Certified at build (closed, strictly convex, every vertex a corner or inside a flat face):
     // the vertex least along a direction is found by descending along the corners
