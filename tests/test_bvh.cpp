@@ -3,11 +3,13 @@
 #include "sulcus/engine/bvh.h"
 
 #include "geometry.h"
+#include "lanes.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <set>
 #include <vector>
@@ -419,6 +421,41 @@ TEST(Bvh, MillionTriangles) {
         expect_same(bvh_query(bvh, box), brute_force(m, box));
     }
 }
+
+#if defined(__AVX2__)
+// The four-lane box test the step scans a kept set of slots with answers as Aabb::overlaps does:
+// boxes apart, overlapping, touching at a face, edge or corner (equal coordinates overlap), one
+// inside the other, empty, and with NaN or infinite coordinates.
+TEST(LanesBoxQuery, AnswersAsOverlaps) {
+    std::mt19937_64 rng(17);
+    std::uniform_int_distribution<int> grid(0, 6), pick(0, 19);
+    const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+    // Coordinates on a small grid, so that equal ones (touching boxes) come often.
+    auto coordinate = [&] {
+        const int k = pick(rng);
+        return k == 0 ? nan : k == 1 ? inf : k == 2 ? -inf : 0.25 * grid(rng);
+    };
+    auto box = [&] {
+        Aabb b;
+        for (int a = 0; a < 3; ++a) {
+            double x = coordinate(), y = coordinate();
+            if (pick(rng) > 1 && x > y) std::swap(x, y);  // mostly ordered; sometimes empty
+            b.lo[a] = x;
+            b.hi[a] = y;
+        }
+        return b;
+    };
+    int overlapping = 0, apart = 0;
+    for (int trial = 0; trial < 200000; ++trial) {
+        const Aabb q = box(), b = trial % 5 == 0 ? q : box();
+        const bool expected = b.overlaps(q);
+        EXPECT_EQ(LanesBoxQuery(q).overlaps(b), expected) << "trial " << trial;
+        (expected ? overlapping : apart) += 1;
+    }
+    EXPECT_GT(overlapping, 10000);
+    EXPECT_GT(apart, 10000);
+}
+#endif
 
 }  // namespace
 }  // namespace sulcus

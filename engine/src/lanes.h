@@ -6,6 +6,8 @@
 #if defined(__AVX2__)
 #include <immintrin.h>
 
+#include <cmath>
+
 #include "sulcus/engine/types.h"
 
 namespace sulcus {
@@ -33,6 +35,24 @@ inline void lanes_of_vectors(const Vec3* v, __m256d& x, __m256d& y, __m256d& z) 
     y = _mm256_shuffle_pd(xy, yz, 0x5);
     z = _mm256_shuffle_pd(zx, yz, 0xA);
 }
+
+// Aabb::overlaps of a box against a fixed query box, by two compares of four lanes: the query
+// taken once as its upper corner (then +inf) and (-inf then) its lower corner.
+struct LanesBoxQuery {
+    __m256d upper, lower;
+    explicit LanesBoxQuery(const Aabb& q)
+        : upper(_mm256_setr_pd(q.hi.x, q.hi.y, q.hi.z, HUGE_VAL)),
+          lower(_mm256_setr_pd(-HUGE_VAL, q.lo.x, q.lo.y, q.lo.z)) {}
+    // box.lo <= q.hi and q.lo <= box.hi on every axis, false where any is NaN, as Aabb::overlaps.
+    bool overlaps(const Aabb& box) const {
+        static_assert(sizeof(Aabb) == 6 * sizeof(double), "a box is six doubles, lower corner first");
+        const double* p = &box.lo.x;
+        const __m256d first = _mm256_loadu_pd(p);      // lo.x lo.y lo.z hi.x
+        const __m256d last = _mm256_loadu_pd(p + 2);   // lo.z hi.x hi.y hi.z
+        const __m256d ok = _mm256_and_pd(_mm256_cmp_pd(first, upper, _CMP_LE_OQ), _mm256_cmp_pd(last, lower, _CMP_GE_OQ));
+        return _mm256_movemask_pd(ok) == 0xF;
+    }
+};
 
 }  // namespace sulcus
 #endif

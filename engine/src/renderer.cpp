@@ -26,6 +26,7 @@
 #include "near_cache.h"
 #include "radix_sort.h"
 #include "geometry.h"
+#include "lanes.h"
 #include "so3.h"
 #include "tool_placement.h"
 
@@ -788,9 +789,16 @@ double inside_reach(const Model& model, const SoftDepths& soft, uint16_t o, doub
         waiting = 0;
     };
 #endif
+#if defined(__AVX2__)
+    const LanesBoxQuery query(b);
+#endif
     for (int i = 0; i < c.count; ++i) {
         const uint32_t slot = c.slots[i];
+#if defined(__AVX2__)
+        if (!query.overlaps(obj.bvh.slot_box(slot))) continue;
+#else
         if (!obj.bvh.slot_box(slot).overlaps(b)) continue;
+#endif
         const uint32_t tri = order[slot];
         double bound = c.kept[i] - since;
 #if defined(__AVX2__)
