@@ -697,7 +697,17 @@ double inside_reach(const Model& model, const SoftDepths& soft, uint16_t o, doub
             overflow = true;
             return false;
         }
-        w.near[w.near_count++] = NearTri{ok, tri, pk, bound};
+        // Field by field in place (as NearTri{ok, tri, pk, bound} would leave them): no copy of a
+        // whole triangle record through the stack, for each of the hundreds a tick gathers.
+        NearTri& nt = w.near[w.near_count++];
+        nt.object = ok;
+        nt.tri = tri;
+        nt.piece = pk;
+        nt.lower_m = bound;
+        nt.separation_m = std::numeric_limits<double>::quiet_NaN();
+        nt.upper_m = 1e300;
+        nt.direction = Vec3(0.0);
+        nt.simplex = GjkSimplex{};
         return !any_only;
     };
     auto visit = [&](uint32_t tri) { return push(tri, bound_of(tri)); };
