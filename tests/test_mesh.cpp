@@ -566,6 +566,17 @@ Counts count_vertices(const MeshTopology& t) {
 // Structural invariants that hold for any closed mesh.
 void expect_consistent(const TriMesh& m, const MeshTopology& t) {
     ASSERT_EQ(t.triangle_edges.size(), m.triangles.size());
+    // Each triangle's byte of features says what its vertices' and edges' records say.
+    ASSERT_EQ(t.triangle_corners.size(), m.triangles.size());
+    for (size_t i = 0; i < m.triangles.size(); ++i)
+        for (int k = 0; k < 3; ++k) {
+            const Convexity cv = t.vertex_convexity[m.triangles[i][size_t(k)]];
+            EXPECT_EQ((t.triangle_corners[i] >> k & 1u) != 0, cv == Convexity::Convex || cv == Convexity::Mixed)
+                << "triangle " << i << " vertex " << k;
+            EXPECT_EQ((t.triangle_corners[i] >> (3 + k) & 1u) != 0,
+                      t.edges[t.triangle_edges[i][size_t(k)]].convexity == Convexity::Convex)
+                << "triangle " << i << " edge " << k;
+        }
     EXPECT_EQ(2 * t.edges.size(), 3 * m.triangles.size());
     for (size_t e = 0; e < t.edges.size(); ++e) {
         const MeshEdge& edge = t.edges[e];

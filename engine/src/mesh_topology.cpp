@@ -101,6 +101,17 @@ MeshTopology build_topology(const TriMesh& mesh) {
                                    : concave         ? Convexity::Concave
                                                      : Convexity::Flat;
     }
+    topo.triangle_corners.assign(nt, 0);
+    for (size_t t = 0; t < nt; ++t) {
+        uint8_t bits = 0;
+        for (int k = 0; k < 3; ++k) {
+            const Convexity cv = topo.vertex_convexity[mesh.triangles[t][size_t(k)]];
+            if (cv == Convexity::Convex || cv == Convexity::Mixed) bits |= uint8_t(1u << k);
+            if (topo.edges[topo.triangle_edges[t][size_t(k)]].convexity == Convexity::Convex)
+                bits |= uint8_t(1u << (3 + k));
+        }
+        topo.triangle_corners[t] = bits;
+    }
     return topo;
 }
 

@@ -1476,14 +1476,13 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         const bool beyond = nt.lower_m > far;
         // Only convex object vertices (and mixed ones) and convex edges meet the tool's faces
         // and edges (F-V and E-E below).
-        for (int k = 0; k < 3; ++k) {
-            const Convexity cv = obj.topology.vertex_convexity[t[k]];
-            if (cv == Convexity::Convex || cv == Convexity::Mixed)
-                w.overts[w.overt_count++] = obj_feature(nt.object, t[k], nt.piece);
-            const uint32_t edge = obj.topology.triangle_edges[nt.tri][k];
-            if (!beyond && obj.topology.edges[edge].convexity == Convexity::Convex)
-                w.oedges[w.oedge_count++] = obj_feature(nt.object, edge, nt.piece);
-        }
+        const unsigned corners = obj.topology.triangle_corners[nt.tri];
+        for (int k = 0; k < 3; ++k)
+            if (corners >> k & 1u) w.overts[w.overt_count++] = obj_feature(nt.object, t[k], nt.piece);
+        if (!beyond && corners >> 3 != 0)
+            for (int k = 0; k < 3; ++k)
+                if (corners >> (3 + k) & 1u)
+                    w.oedges[w.oedge_count++] = obj_feature(nt.object, obj.topology.triangle_edges[nt.tri][k], nt.piece);
         if (beyond) continue;
         // No point further than `far` from the triangle's bounding sphere is within `far` of it.
         const TriangleSphere& ts = obj.topology.triangle_spheres[nt.tri];

@@ -60,6 +60,10 @@ struct MeshTopology {
     std::vector<uint32_t> vertex_triangle_offsets, vertex_triangles;
     std::vector<uint32_t> vertex_edge_offsets, vertex_edges;
     std::vector<Convexity> vertex_convexity;
+    // Per triangle, which of its features can meet a tool's: bit k (k < 3) for a convex or mixed
+    // vertex k, bit 3 + k for a convex edge k (triangle_edges order). One byte where the step
+    // would otherwise read three vertices' and three edges' records.
+    std::vector<uint8_t> triangle_corners;
 };
 
 // Bend angle below which an edge counts as flat, in radians.
