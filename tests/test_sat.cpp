@@ -181,6 +181,43 @@ TEST(FastSat, FourAtATimeGivesTheOneAtATimeAnswerToTheBit) {
     four_at_a_time_match(make_probe_tip_collision(ProbeKind::Nabers), 1e-3, 2000, 23);
 }
 
+// Placing the tool four vertices and four face planes at a time gives glm's q * v + p and
+// n . p + offset to the bit, for every probe tip and odd counts (the last ones one at a time), at
+// random poses.
+TEST(ToolPlacement, FourAtATimeGivesGlmsAnswerToTheBit) {
+    std::vector<TriMesh> meshes = {make_box(Vec3(1e-3, 2e-3, 0.5e-3))};
+    for (ProbeKind kind : kAllProbeKinds) meshes.push_back(make_probe_tip_collision(kind));
+    std::mt19937_64 rng(31);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int compared = 0;
+    for (const TriMesh& mesh : meshes) {
+        const ModelBuild mb = build_model(mesh, {}, RendererSettings{});
+        ASSERT_TRUE(mb.model) << mb.error;
+        const ModelTool& tool = mb.model->tool;
+        std::vector<Vec3> verts(tool.mesh.vertices.size()), normals(tool.face_normals.size());
+        std::vector<double> offsets(tool.face_normals.size());
+        for (int trial = 0; trial < 200; ++trial) {
+            const Quat q = glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng)));
+            const Vec3 p = 0.05 * Vec3(u(rng), u(rng), u(rng));
+            place_tool_vertices(tool, q, p, verts.data());
+            place_tool_planes(tool, q, p, normals.data(), offsets.data());
+            for (size_t i = 0; i < verts.size(); ++i) {
+                const Vec3 expected = q * tool.mesh.vertices[i] + p;
+                ASSERT_EQ(std::memcmp(&verts[i], &expected, sizeof(Vec3)), 0) << "vertex " << i;
+                ++compared;
+            }
+            for (size_t f = 0; f < normals.size(); ++f) {
+                const Vec3 n = q * tool.face_normals[f];
+                const double d = tool.face_offsets[f] + glm::dot(n, p);
+                ASSERT_EQ(std::memcmp(&normals[f], &n, sizeof(Vec3)), 0) << "face " << f;
+                ASSERT_EQ(std::memcmp(&offsets[f], &d, sizeof(double)), 0) << "face " << f;
+                ++compared;
+            }
+        }
+    }
+    EXPECT_GT(compared, 10000);
+}
+
 // The guard takes the gap along one axis (the triangle's normal, the axis a pair's last test
 // found) for the separation where it is enough: it must never exceed the separation, and along
 // the test's own axis it must give the separation back.

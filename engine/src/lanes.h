@@ -36,6 +36,36 @@ inline void lanes_of_vectors(const Vec3* v, __m256d& x, __m256d& y, __m256d& z) 
     z = _mm256_shuffle_pd(zx, yz, 0xA);
 }
 
+// Four vectors from one register per coordinate back to v[0, 4), as lanes_of_vectors took them.
+inline void store_lanes_as_vectors(__m256d x, __m256d y, __m256d z, Vec3* v) {
+    double* p = &v[0].x;
+    const __m256d xy = _mm256_unpacklo_pd(x, y);         // (x0 y0)(x2 y2)
+    const __m256d zx = _mm256_shuffle_pd(z, x, 0xA);      // (z0 x1)(z2 x3)
+    const __m256d yz = _mm256_unpackhi_pd(y, z);          // (y1 z1)(y3 z3)
+    _mm256_storeu_pd(p, _mm256_permute2f128_pd(xy, zx, 0x20));      // x0 y0 z0 x1
+    _mm256_storeu_pd(p + 4, _mm256_permute2f128_pd(yz, xy, 0x30));  // y1 z1 x2 y2
+    _mm256_storeu_pd(p + 8, _mm256_permute2f128_pd(zx, yz, 0x31));  // z2 x3 y3 z3
+}
+
+// A rotation quaternion applied to four vectors as glm's q * v: with u = (q.x, q.y, q.z),
+// v + ((u x v) q.w + u x (u x v)) 2, the cross products as glm::cross takes them.
+struct LanesRotation {
+    __m256d x, y, z, w;
+    explicit LanesRotation(const Quat& q) : x(lanes_of(q.x)), y(lanes_of(q.y)), z(lanes_of(q.z)), w(lanes_of(q.w)) {}
+    void apply(__m256d& vx, __m256d& vy, __m256d& vz) const {
+        const __m256d ux = _mm256_sub_pd(_mm256_mul_pd(y, vz), _mm256_mul_pd(vy, z));
+        const __m256d uy = _mm256_sub_pd(_mm256_mul_pd(z, vx), _mm256_mul_pd(vz, x));
+        const __m256d uz = _mm256_sub_pd(_mm256_mul_pd(x, vy), _mm256_mul_pd(vx, y));
+        const __m256d uux = _mm256_sub_pd(_mm256_mul_pd(y, uz), _mm256_mul_pd(uy, z));
+        const __m256d uuy = _mm256_sub_pd(_mm256_mul_pd(z, ux), _mm256_mul_pd(uz, x));
+        const __m256d uuz = _mm256_sub_pd(_mm256_mul_pd(x, uy), _mm256_mul_pd(ux, y));
+        const __m256d two = lanes_of(2.0);
+        vx = _mm256_add_pd(vx, _mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(ux, w), uux), two));
+        vy = _mm256_add_pd(vy, _mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(uy, w), uuy), two));
+        vz = _mm256_add_pd(vz, _mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(uz, w), uuz), two));
+    }
+};
+
 // Aabb::overlaps of a box against a fixed query box, by two compares of four lanes: the query
 // taken once as its upper corner (then +inf) and (-inf then) its lower corner.
 struct LanesBoxQuery {
