@@ -455,6 +455,31 @@ TEST(LanesBoxQuery, AnswersAsOverlaps) {
     EXPECT_GT(overlapping, 10000);
     EXPECT_GT(apart, 10000);
 }
+
+// The box of a run of vectors four at a time is the box Aabb::grow makes of them one by one, for
+// every length from none to past a few groups of four, with NaN and infinite coordinates among
+// them and with many equal ones.
+TEST(LanesBounds, GivesTheBoxGrowGives) {
+    std::mt19937_64 rng(29);
+    std::uniform_int_distribution<int> grid(-4, 4), pick(0, 29);
+    const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+    auto coordinate = [&] {
+        const int k = pick(rng);
+        return k == 0 ? nan : k == 1 ? inf : k == 2 ? -inf : k < 15 ? 0.125 * grid(rng) : std::ldexp(double(grid(rng)), -grid(rng));
+    };
+    std::vector<Vec3> v(40);
+    for (int trial = 0; trial < 20000; ++trial) {
+        const int n = trial % 19;
+        for (int i = 0; i < n; ++i) v[size_t(i)] = Vec3(coordinate(), coordinate(), coordinate());
+        Aabb expected;
+        for (int i = 0; i < n; ++i) expected.grow(v[size_t(i)]);
+        const Aabb got = lanes_bounds(v.data(), n);
+        for (int a = 0; a < 3; ++a) {
+            EXPECT_EQ(got.lo[a], expected.lo[a]) << "trial " << trial << " axis " << a;
+            EXPECT_EQ(got.hi[a], expected.hi[a]) << "trial " << trial << " axis " << a;
+        }
+    }
+}
 #endif
 
 }  // namespace

@@ -84,5 +84,29 @@ struct LanesBoxQuery {
     }
 };
 
+// The box of v[0, n), as Aabb::grow over them in turn gives it (a NaN coordinate left out as
+// there), four vectors at a time; the same numbers but for the sign of a zero coordinate, which
+// the order of the comparisons may give either way.
+inline Aabb lanes_bounds(const Vec3* v, int n) {
+    Aabb box;
+    int i = 0;
+    if (n >= 4) {
+        __m256d lx = lanes_of(box.lo.x), ly = lanes_of(box.lo.y), lz = lanes_of(box.lo.z);
+        __m256d hx = lanes_of(box.hi.x), hy = lanes_of(box.hi.y), hz = lanes_of(box.hi.z);
+        for (; i + 4 <= n; i += 4) {
+            __m256d x, y, z;
+            lanes_of_vectors(v + i, x, y, z);
+            lx = lanes_min(lx, x), ly = lanes_min(ly, y), lz = lanes_min(lz, z);
+            hx = lanes_max(hx, x), hy = lanes_max(hy, y), hz = lanes_max(hz, z);
+        }
+        alignas(32) double lo[3][4], hi[3][4];
+        _mm256_store_pd(lo[0], lx), _mm256_store_pd(lo[1], ly), _mm256_store_pd(lo[2], lz);
+        _mm256_store_pd(hi[0], hx), _mm256_store_pd(hi[1], hy), _mm256_store_pd(hi[2], hz);
+        for (int k = 0; k < 4; ++k) box.grow(Aabb{Vec3(lo[0][k], lo[1][k], lo[2][k]), Vec3(hi[0][k], hi[1][k], hi[2][k])});
+    }
+    for (; i < n; ++i) box.grow(v[i]);
+    return box;
+}
+
 }  // namespace sulcus
 #endif

@@ -887,8 +887,12 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
         };
         const Vec3* axis = w.capsule + k * (kToolCapsules + 1);
         const CapsuleLine line = piece.capsule_count > 0 ? capsule_line(piece, axis) : CapsuleLine{};
+#if defined(__AVX2__)
+        const Aabb box = lanes_bounds(tool_world + piece.vertex_begin, int(piece.vertex_count));
+#else
         Aabb box;
         for (uint32_t v = piece.vertex_begin; v < piece.vertex_begin + piece.vertex_count; ++v) box.grow(tool_world[v]);
+#endif
         const ConvexView view = tool_view(model, k, tool_world, w);
         const bool from_prior = prior_frame && !any_only && piece.capsule_count > 0 &&
                                 prior_covers(model, k, at, *prior_frame, lower, upper, w);
