@@ -1723,6 +1723,9 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
     // Tool edges against convex object edges (E-E, Type 2) on the dynamic plane of eq. 7.
     w.oedge_count = sort_unique(w.oedges, w.feature_scratch, w.oedge_count, w.feature_table);
     ++w.edge_memo_clock;
+    // The last edge's object and zone, and their `covered` below.
+    int covered_object = -1, covered_zone = -1;
+    double covered = 0.0;
     for (int i = 0; i < w.oedge_count; ++i) {
         const ModelObject& obj = model.objects[feature_object(w.oedges[i])];
         const MeshEdge& e = obj.topology.edges[feature_id(w.oedges[i])];
@@ -1793,16 +1796,23 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         const Vec3 mid_l = 0.5 * (l0 + l1);
         const double eo2 = glm::dot(eo, eo);
         const double near_o = far + 0.5 * glm::length(eo) + 1e-12;
-        // An atom of the pair no further than `covered` from either side of the edge is covered by
-        // its zone's give (ZoneCover), as is every pair whose tool edge passes that close to the
-        // edge's midpoint (no line is further from the edge than that); 0 where none is.
-        const uint16_t edge_zone = obj.triangle_zone.empty() ? obj.zone : obj.triangle_zone[e.tri[0]];
-        const double covered = compliant_zone(model, feature_object(w.oedges[i]), edge_zone, true)
-                                   ? std::max(0.0, -cover.limit(edge_zone) - cover.vertex_motion)
-                                   : 0.0;
-        const double covered_l = std::max(0.0, covered - 1e-12);
         const int open = pairs_not_at_an_end(tool.edge_lines.data() + piece.edge_begin, edge_hits, hits, d_l, l0, e_l,
                                              w.edge_open);
+        if (open == 0) continue;
+        // An atom of the pair no further than `covered` from either side of the edge is covered by
+        // its zone's give (ZoneCover), as is every pair whose tool edge passes that close to the
+        // edge's midpoint (no line is further from the edge than that); 0 where none is. The same
+        // for every edge of a zone: kept from the last edge's.
+        const uint16_t edge_object = feature_object(w.oedges[i]);
+        const uint16_t edge_zone = obj.triangle_zone.empty() ? obj.zone : obj.triangle_zone[e.tri[0]];
+        if (edge_object != covered_object || edge_zone != covered_zone) {
+            covered_object = edge_object;
+            covered_zone = edge_zone;
+            covered = compliant_zone(model, edge_object, edge_zone, true)
+                          ? std::max(0.0, -cover.limit(edge_zone) - cover.vertex_motion)
+                          : 0.0;
+        }
+        const double covered_l = std::max(0.0, covered - 1e-12);
         for (int h = 0; h < open; ++h) {
             const uint32_t te = piece.edge_begin + w.edge_open[h];
             const ModelTool::EdgeLine& line = tool.edge_lines[te];
