@@ -212,6 +212,79 @@ TEST(ToolPieces, TheSlabsAlongTheAxisFindEveryRunAsASearchWould) {
     EXPECT_GT(empty, runs / 10);
 }
 
+// A point outside a piece is over the face plane it is most in front of by at least plane_ratio
+// of its distance from the piece: points off the pieces' vertices, edges and faces, along blends
+// of the normals of the faces round them (where the bound is tightest: a box's corner along its
+// diagonal is over each face by 1 / sqrt(3) of its distance).
+TEST(ToolPieces, ThePlaneRatioBoundsHowFarAPointIsOverTheFacesOfThePiece) {
+    std::vector<TriMesh> tools = {bent_probe()};
+    for (ProbeKind kind : kAllProbeKinds) tools.push_back(make_probe_tip_collision(kind));
+    std::mt19937_64 rng(17);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    double tightest = 1e300;
+    int points = 0;
+    for (const TriMesh& mesh : tools) {
+        const ModelBuild b = build_model(mesh, {}, RendererSettings{});
+        ASSERT_TRUE(b.model) << b.error;
+        const ModelTool& tool = b.model->tool;
+        for (size_t k = 0; k < tool.pieces.size(); ++k) {
+            const ToolPiece& p = tool.pieces[k];
+            EXPECT_GT(p.plane_ratio, 0.5) << "piece " << k;
+            EXPECT_LE(p.plane_ratio, 1.0) << "piece " << k;
+            const Vec3* vs = tool.mesh.vertices.data() + p.vertex_begin;
+            const uint32_t t0 = p.triangle_begin, t1 = p.triangle_begin + p.triangle_count;
+            auto over = [&](const Vec3& q) {
+                double most = -1e300;
+                for (uint32_t f = p.face_begin; f < p.face_begin + p.face_count; ++f)
+                    most = std::max(most, glm::dot(tool.face_normals[f], q) - tool.face_offsets[f]);
+                return most;
+            };
+            auto distance = [&](const Vec3& q) {
+                double least = 1e300;
+                for (uint32_t t = t0; t < t1; ++t) {
+                    const auto& tri = tool.piece_triangles[t];
+                    least = std::min(least, closest_on_triangle(q, vs[tri[0]], vs[tri[1]], vs[tri[2]]).distance);
+                }
+                return least;
+            };
+            for (uint32_t t = t0; t < t1; ++t) {
+                const auto& tri = tool.piece_triangles[t];
+                for (int corner = 0; corner < 3; ++corner) {
+                    const uint32_t v = tri[size_t(corner)];
+                    const Vec3& next = vs[tri[size_t((corner + 1) % 3)]];
+                    const Vec3& last = vs[tri[size_t((corner + 2) % 3)]];
+                    // The normals of the faces round v, blended at random; from v itself, from a
+                    // point of an edge of v and from a point inside the triangle.
+                    std::vector<Vec3> normals;
+                    for (uint32_t u = t0; u < t1; ++u)
+                        for (uint32_t c : tool.piece_triangles[u])
+                            if (c == v) normals.push_back(tool.piece_triangle_normals[u]);
+                    for (int trial = 0; trial < 6; ++trial) {
+                        Vec3 blend(0.0);
+                        for (const Vec3& n : normals) blend += std::pow(unit(rng), 4.0) * n;
+                        if (trial == 0) blend = normals[0];
+                        const double len = glm::length(blend);
+                        if (!(len > 0.0)) continue;
+                        const double a = unit(rng), c = unit(rng) * (1.0 - a);
+                        const Vec3 from = trial < 3   ? vs[v]
+                                          : trial < 5 ? vs[v] + a * (next - vs[v])
+                                                      : vs[v] + a * (next - vs[v]) + c * (last - vs[v]);
+                        const Vec3 q = from + (1e-6 * std::pow(1000.0, unit(rng))) * (blend / len);
+                        const double d = distance(q), h = over(q);
+                        if (!(h > 0.0)) continue;  // not outside (a blend that points in)
+                        ++points;
+                        tightest = std::min(tightest, h / d);
+                        EXPECT_GE(h, p.plane_ratio * d - 1e-15) << "piece " << k << " vertex " << v;
+                    }
+                }
+            }
+        }
+    }
+    EXPECT_GT(points, 1000);
+    // The bound is needed: some points are over every face by well under their distance.
+    EXPECT_LT(tightest, 0.9);
+}
+
 // A piece certified for it finds the vertex least along a direction by descending along its
 // corners: the same value as looking at every vertex, from any start, for any direction; GJK's
 // bounds with the descent are those without it, to the tolerance asked. Certified: a vertex

@@ -156,6 +156,12 @@ struct ToolPiece {
     // two ends (each no more than capsule_radii_m[k]) still holds the slab of the piece it covers.
     // A tapering probe's slab lies far closer to it than to the capsule.
     std::array<std::array<double, 2>, kToolCapsules> taper_radii_m{};
+    // How far a point outside the piece is over the face plane it is most in front of, at the
+    // least, per metre of its distance from the piece (in [0, 1]; 1 for a piece without corners):
+    // the least over the piece's vertices of how far the hull of the normals of the faces round
+    // it lies from the origin. A point further than reach / plane_ratio from the piece is beyond
+    // the reach of every F-V atom of it.
+    double plane_ratio = 0.0;
     // kToolCapsules for a long piece (axis over four times its widest capsule), else 0: for a
     // compact piece the bounds are loose and cost more than they save.
     int capsule_count = 0;
