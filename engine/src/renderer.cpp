@@ -1481,10 +1481,10 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         // Only convex object vertices (and mixed ones) and convex edges meet the tool's faces
         // and edges (F-V and E-E below).
         const unsigned corners = obj.topology.triangle_corners[nt.tri];
-        // Its vertices are as far from the piece, and so over some face plane of it by
-        // plane_ratio of that (a nanometre under, for the rounding of the planes and the merging
-        // of coplanar faces): beyond the reach there, they make no F-V atom.
-        const bool faces_beyond = beyond && piece.plane_ratio * nt.lower_m > reach + 1e-9;
+        // Its vertices are no nearer the piece than its bound says, and so over some face plane
+        // of the piece by plane_ratio of that (a nanometre under, for the rounding of the planes
+        // and the merging of coplanar faces): beyond the reach there, they make no F-V atom.
+        const bool faces_beyond = piece.plane_ratio * nt.lower_m > reach + 1e-9;
         if (!faces_beyond)
             for (int k = 0; k < 3; ++k)
                 if (corners >> k & 1u) w.overts[w.overt_count++] = obj_feature(nt.object, t[k], nt.piece);
