@@ -97,6 +97,9 @@ constexpr int kMaxToolEdges = 3 * kMaxToolVertices;
 static_assert(kMaxToolEdges <= 65536, "a piece's edges are counted in 16 bits (Workspace::edge_hits, EdgeHitMemo::hits)");
 static_assert(kToolCapsules <= 16, "Bvh::query_capsule_chain takes at most 16 capsules");
 constexpr int kMaxNear = 8192;
+// How far a compliant set's capsules may move before a triangle they reached into is measured
+// again (m; gather_in_box).
+constexpr double kRemeasureMotion = 3e-5;
 constexpr int kMaxAtoms = 1024;
 // Triangles the guard finds the atoms let the tool into, taken in one round: all of them as a
 // rule (deep in the tissue some sixty at once), so that the candidate is solved again once.
@@ -353,6 +356,7 @@ struct Workspace {
         int count = 0;
         uint32_t slots[kCompliantSetSlots];
         double kept[kCompliantSetSlots];  // bound + moved when measured (m); -1e300: not measured
+        double measured_at[kCompliantSetSlots];  // `moved` when measured (m)
         Vec3 axis[kToolCapsules + 1];     // the capsule points at the last query (world)
         double moved = 0.0;               // m
     };
@@ -788,12 +792,14 @@ double inside_reach(const Model& model, const SoftDepths& soft, uint16_t o, doub
             for (int k = 0; k < 4; ++k) {
                 w.near[wait_near[k]].lower_m = bounds[k];
                 c.kept[wait_slot[k]] = bounds[k] + c.moved;
+                c.measured_at[wait_slot[k]] = c.moved;
             }
         } else {
             for (int k = 0; k < waiting; ++k) {
                 const double bound = bound_of(wait_tri[k]);
                 w.near[wait_near[k]].lower_m = bound;
                 c.kept[wait_slot[k]] = bound + c.moved;
+                c.measured_at[wait_slot[k]] = c.moved;
             }
         }
         waiting = 0;
@@ -811,8 +817,13 @@ double inside_reach(const Model& model, const SoftDepths& soft, uint16_t o, doub
 #endif
         const uint32_t tri = order[slot];
         double bound = c.kept[i] - since;
+        // A triangle the capsules reached into when it was last measured, since when they have
+        // moved less than kRemeasureMotion: its bound stands (it is still a lower bound, if a
+        // looser one), since measuring it again would almost always give it a bound under zero too,
+        // which every use of the bound takes as this one.
+        const bool stands = bound < 0.0 && c.kept[i] > -1e299 && c.moved - c.measured_at[i] < kRemeasureMotion;
 #if defined(__AVX2__)
-        if (keep && !(bound > beyond) && w.near_count < kMaxNear) {
+        if (keep && !(bound > beyond) && !stands && w.near_count < kMaxNear) {
             wait_tri[waiting] = tri;
             wait_near[waiting] = w.near_count;
             wait_slot[waiting++] = i;
@@ -822,9 +833,10 @@ double inside_reach(const Model& model, const SoftDepths& soft, uint16_t o, doub
             continue;
         }
 #endif
-        if (!keep || !(bound > beyond)) {
+        if (!keep || (!(bound > beyond) && !stands)) {
             bound = bound_of(tri);
             c.kept[i] = bound + c.moved;
+            c.measured_at[i] = c.moved;
         }
         if (!push(tri, bound)) break;
     }
