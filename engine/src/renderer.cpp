@@ -771,6 +771,11 @@ double inside_reach(const Model& model, const SoftDepths& soft, uint16_t o, doub
     c.moved += moved;
     // A picometre under, for the rounding of the sums.
     const double since = c.moved + 1e-12;
+    // A measured bound, kept with how far the capsules had moved then.
+    auto remember = [&](int slot, double bound) {
+        c.kept[slot] = bound + c.moved;
+        c.measured_at[slot] = c.moved;
+    };
     const std::vector<uint32_t>& order = obj.bvh.order();
 #if defined(__AVX2__)
     // The triangles whose bounds are to be measured, four at a time: each is pushed at once, its
@@ -791,15 +796,13 @@ double inside_reach(const Model& model, const SoftDepths& soft, uint16_t o, doub
             piece_compliant_bound4(piece, line, spheres, corners, bounds);
             for (int k = 0; k < 4; ++k) {
                 w.near[wait_near[k]].lower_m = bounds[k];
-                c.kept[wait_slot[k]] = bounds[k] + c.moved;
-                c.measured_at[wait_slot[k]] = c.moved;
+                remember(wait_slot[k], bounds[k]);
             }
         } else {
             for (int k = 0; k < waiting; ++k) {
                 const double bound = bound_of(wait_tri[k]);
                 w.near[wait_near[k]].lower_m = bound;
-                c.kept[wait_slot[k]] = bound + c.moved;
-                c.measured_at[wait_slot[k]] = c.moved;
+                remember(wait_slot[k], bound);
             }
         }
         waiting = 0;
@@ -835,8 +838,7 @@ double inside_reach(const Model& model, const SoftDepths& soft, uint16_t o, doub
 #endif
         if (!keep || (!(bound > beyond) && !stands)) {
             bound = bound_of(tri);
-            c.kept[i] = bound + c.moved;
-            c.measured_at[i] = c.moved;
+            remember(i, bound);
         }
         if (!push(tri, bound)) break;
     }
