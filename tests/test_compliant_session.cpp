@@ -162,6 +162,37 @@ TEST(CompliantSession, OneGuardRoundPerCandidateAndIdleCandidatesLeftOut) {
     EXPECT_LT(solved_skip, solved_all);
 }
 
+// A candidate the step can no longer take (an alternative with no less energy than the best so
+// far, a rescue's answer with more than the rescue may take) is given up before its guard: the
+// session's every tick has the same status, pose and force to the bit either way, and the guard
+// tests fewer triangles over it.
+TEST(CompliantSession, CandidatesOfNoUseAreGivenUpBeforeTheirGuard) {
+    const cli::BenchScene b = load_session();
+    ASSERT_FALSE(b.ticks.empty());
+    RendererSettings guarded;
+    guarded.give_up_early = false;
+    RendererSettings early = guarded;
+    early.give_up_early = true;
+    ModelBuild mb_guarded = session_model(b, guarded);
+    ModelBuild mb_early = session_model(b, early);
+    ASSERT_TRUE(mb_guarded.model) << mb_guarded.error;
+    ASSERT_TRUE(mb_early.model) << mb_early.error;
+    State s_guarded = make_state(b.ticks.front()), s_early = make_state(b.ticks.front());
+    long tested_guarded = 0, tested_early = 0;
+    int differ = 0;
+    for (size_t i = 0; i < b.ticks.size(); ++i) {
+        const StepResult rg = step(*mb_guarded.model, s_guarded, b.ticks[i]);
+        const StepResult re = step(*mb_early.model, s_early, b.ticks[i]);
+        tested_guarded += rg.stats.triangles_tested;
+        tested_early += re.stats.triangles_tested;
+        differ += rg.status != re.status || rg.graphic.position != re.graphic.position ||
+                  rg.graphic.orientation != re.graphic.orientation || rg.force_N != re.force_N ||
+                  rg.torque_Nm != re.torque_Nm;
+    }
+    EXPECT_EQ(differ, 0);
+    EXPECT_LT(tested_early, tested_guarded);
+}
+
 // At every 10th tick, each piece of the tool at the graphic pose overlaps no triangle of the
 // gingiva (by the separating-axis test: the least overlap over all axes) deeper than the deepest
 // give of the tissue at that tick, within the constraint tolerance.

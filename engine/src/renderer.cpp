@@ -385,11 +385,28 @@ Workspace& workspace() {
     return *ws;
 }
 
+// The energy a caller of solve_candidate can take: an answer with more than `any`, or with
+// more than `virtual_answer` while some contact of it is virtual, is of no use to it.
+struct EnergyLimit {
+    double any = std::numeric_limits<double>::infinity();
+    double virtual_answer = std::numeric_limits<double>::infinity();
+};
+
 double energy_of(const HapticSettings& h, const double x[6], const double target[6]) {
     double e = 0.0;
     for (int j = 0; j < 3; ++j) e += h.weight_translational * (x[j] - target[j]) * (x[j] - target[j]);
     for (int j = 3; j < 6; ++j) e += h.weight_rotational * (x[j] - target[j]) * (x[j] - target[j]);
     return 0.5 * e;
+}
+
+// eq. 3's energy of pose x for the target with the zones' springs (spring variables x[6, vars)
+// weighted as in P), and the springs' part of it.
+double energy_with_springs(const HapticSettings& h, const qp::Problem& P, const double* x, const double target[6],
+                           int vars, double* springs_out = nullptr) {
+    double springs = 0.0;
+    for (int v = qp::kPoseVars; v < vars; ++v) springs += 0.5 * P.weight[v] * x[v] * x[v];
+    if (springs_out) *springs_out = springs;
+    return energy_of(h, x, target) + springs;
 }
 
 ConvexView tool_view(const Model& model, size_t piece, const Vec3* world_vertices, const Workspace& w) {
@@ -2215,12 +2232,27 @@ double separation_test(const Model& model, const ConvexView& view, const NearTri
     return sat.separation;
 }
 
+bool contact_is_real(const Model& model, const Atom& a, const ToolPoseAt& at, double give);
+
+// Whether every contact of the candidate's atoms (w.cand, their zones' give in w.slacks) at `at`
+// is real: an atom within 2 tolerances of zero whose features meet (contact_is_real).
+bool answer_is_real(const Model& model, const Workspace& w, const ToolPoseAt& at) {
+    const double tol = model.settings.constraint_tol_m;
+    for (int i = 0; i < w.cand_count; ++i) {
+        const int slot = w.cand_slot[i];
+        double give = 0.0;
+        if (value_with_give(model, w.cand[i], at, slot, slot < 0 ? 0.0 : w.slacks.depth[slot], &give) > 2.0 * tol) continue;
+        if (!contact_is_real(model, w.cand[i], at, give)) return false;
+    }
+    return true;
+}
+
 // solve: one candidate set by sequential linearization (re-linearize until exact).
 
 CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3& frame, const double target[6],
                                 const double target_local[6], const double lower[6], const double upper[6],
                                 double reach, const Atom* previous, int previous_count, Workspace& w,
-                                StepStats& stats) {
+                                StepStats& stats, const EnergyLimit& limit) {
     const RendererSettings& S = model.settings;
     const HapticSettings& h = S.haptic;
     CandidateResult r;
@@ -2321,6 +2353,13 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         }
         if (worst > S.constraint_tol_m) continue;
         for (int k = 0; k < w.slacks.zones; ++k) w.slacks.depth[k] = slot_depth(w.slacks, k, x);
+        // An answer of no use to the caller (EnergyLimit) is given up before the guard: where the
+        // guard passes it is the answer, and the planes the guard adds otherwise hold the tool
+        // further from the target.
+        if (S.give_up_early && (std::isfinite(limit.any) || std::isfinite(limit.virtual_answer))) {
+            const double energy = energy_with_springs(h, P, x, target, vars);
+            if (energy > limit.any || (energy > limit.virtual_answer && !answer_is_real(model, w, nx))) return r;
+        }
 
         // Guard: every triangle in reach must be separated from the tool at the new pose (a
         // compliant one: by no more than its zone gives way). Planes at the new pose for the
@@ -2467,10 +2506,8 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         if (missed == 0) {
             r.ok = true;
             for (int j = 0; j < 6; ++j) r.x[j] = x[j];
-            r.energy = energy_of(h, x, target);
             double springs = 0.0;
-            for (int v = qp::kPoseVars; v < vars; ++v) springs += 0.5 * P.weight[v] * x[v] * x[v];
-            r.energy += springs;
+            r.energy = energy_with_springs(h, P, x, target, vars, &springs);
             r.spring_energy_J = springs / spring_scale;
             r.error = worst;
             r.atom_count = w.cand_count;
@@ -2596,7 +2633,11 @@ bool solve_candidates(const Model& model, const Pose& base, const Mat3& frame, c
     int shared_planes = w.plane_count;
     // Candidate c: the default set's atoms (after the first, one swapped for its alternative),
     // then the first `planes` of w.planes.
+    // After the first, a candidate is kept only with less energy than the best so far: one whose
+    // answer has no less is given up before its guard.
     auto solve = [&](int c, int planes) {
+        EnergyLimit limit;
+        if (c > 0) limit.any = std::nextafter(best_energy, 0.0);
         w.cand_count = w.atom_count;
         std::copy(w.atoms, w.atoms + w.atom_count, w.cand);
         std::fill(w.cand_key, w.cand_key + w.atom_count, uint64_t(0));
@@ -2607,7 +2648,7 @@ bool solve_candidates(const Model& model, const Pose& base, const Mat3& frame, c
         }
         ++stats.candidates;
         return solve_candidate(model, base, frame, target, target_local, lower, upper, reach, state.active,
-                               state.active_count, w, stats);
+                               state.active_count, w, stats, limit);
     };
     for (int c = 0; c < candidates; ++c) {
         if (c > 0 && plain_default && model.settings.skip_idle_candidates && !holds[w.alts[c - 1].replace]) continue;
@@ -2901,7 +2942,7 @@ bool apply_friction(const Model& model, const State& state, const Pose& base, co
     std::copy(w.best, w.best + w.best_count, w.cand);
     std::copy(w.best_key, w.best_key + w.best_count, w.cand_key);
     const CandidateResult cr = solve_candidate(model, base, frame, target, target_local, lower, upper, reach,
-                                               state.active, state.active_count, w, stats);
+                                               state.active, state.active_count, w, stats, EnergyLimit{});
     ++stats.candidates;
     if (!cr.ok) return false;
     for (int j = 0; j < 6; ++j) x_sol[j] = cr.x[j];
@@ -3065,24 +3106,20 @@ void rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
             for (int k = 0; k < replacing_count; ++k) append(replacing[k]);
             if (gone_count < kMaxGone) gone[gone_count++] = a;
         }
-        ++stats.candidates;
-        const CandidateResult cr = solve_candidate(model, base, frame, target, target_local, lower, upper, reach,
-                                                   state.active, state.active_count, w, stats);
-        if (!cr.ok) return;
         // Every contact real: taken with no more energy than the tolerance's give allows (the
         // swapped-in plane meets the slid-past answer to the tolerance, not exactly: the tool may
         // rise by a few tolerances). Still virtual: taken on for another round only with less.
-        const ToolPoseAt nx = tool_pose_at(base, cr.x);
-        bool real = true;
-        for (int i = 0; i < w.cand_count && real; ++i) {
-            const int slot = w.cand_slot[i];
-            double give = 0.0;
-            real = value_with_give(model, w.cand[i], nx, slot, slot < 0 ? 0.0 : w.slacks.depth[slot], &give) > 2.0 * tol ||
-                   contact_is_real(model, w.cand[i], nx, give);
-        }
+        // An answer over the first allowance is given up before its guard.
         const double lift = 4.0 * tol, w_t = model.settings.haptic.weight_translational;
-        const double allowed = real ? w.best_energy + 2.0 * std::sqrt(2.0 * w.best_energy * w_t) * lift + w_t * lift * lift
-                                    : w.best_energy;
+        EnergyLimit limit;
+        limit.any = w.best_energy + 2.0 * std::sqrt(2.0 * w.best_energy * w_t) * lift + w_t * lift * lift;
+        limit.virtual_answer = w.best_energy;
+        ++stats.candidates;
+        const CandidateResult cr = solve_candidate(model, base, frame, target, target_local, lower, upper, reach,
+                                                   state.active, state.active_count, w, stats, limit);
+        if (!cr.ok) return;
+        const bool real = answer_is_real(model, w, tool_pose_at(base, cr.x));
+        const double allowed = real ? limit.any : limit.virtual_answer;
         if (!(cr.energy <= allowed)) return;
         keep_candidate(model, cr, w, stats, x_sol);
         stats.atoms = w.best_count;

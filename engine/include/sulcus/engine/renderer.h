@@ -71,6 +71,12 @@ struct RendererSettings {
     // energy (docs/renderer.md, solve). Off: every candidate is solved. Changes the step's cost,
     // not which candidate wins.
     bool skip_idle_candidates = true;
+    // Give up a candidate before its guard when its answer is already of no use to the step: an
+    // alternative set's with no less energy than the best so far, a rescue's with more than the
+    // rescue may take (docs/renderer.md, solve). The guard's planes only hold the tool further
+    // from the target, so this changes the step's cost, not its answers. Off: every candidate's
+    // answer is guarded.
+    bool give_up_early = true;
     // Start each tick with the separating planes of the triangles whose planes held the tool at
     // the last tick (State::held_planes), rather than finding those triangles again by a QP and
     // a round of the guard: in the tissue the same few dozen gingiva triangles need planes tick
