@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 namespace sulcus {
 
@@ -79,6 +81,11 @@ inline void extent_along(const ConvexView& poly, const Vec3& n, double& pmin, do
         pmax = std::max(pmax, v);
     }
 }
+
+// A four-lane mask's bit j moved to bit 0 of byte j.
+constexpr uint32_t kLaneBytes[16] = {0x00000000, 0x00000001, 0x00000100, 0x00000101, 0x00010000, 0x00010001,
+                                     0x00010100, 0x00010101, 0x01000000, 0x01000001, 0x01000100, 0x01000101,
+                                     0x01010000, 0x01010001, 0x01010100, 0x01010101};
 
 // extent_along with four vertices at a time, where that gives its answer to the bit: the products
 // are the same, and the least and greatest of a set of numbers do not depend on the order they
@@ -241,7 +248,7 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
         const double ul = glm::length(u);
         // Near-parallel edge pairs give no new axis: the face normals cover them.
         if (ul <= 1e-9 * scale_e[k] * glm::length(pe)) return;
-        if (glm::length(x) > 0.0) {
+        if (glm::dot(x, x) > 0.0) {  // its length is not zero
             // A face of the Minkowski difference: along its normal (x, in the edge's normal
             // cone) the polytope reaches farthest at this edge, so its extent is one dot.
             Vec3 n = u / ul;
@@ -262,7 +269,9 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
     // the triangle's edge, and x, their blend on that plane, faces out of the triangle.
     auto arcs_cross = [&](int k, int e, double al, double be, double out_length) {
         const Vec3 x = std::abs(be) * poly.edge_normals[e][0] + std::abs(al) * poly.edge_normals[e][1];
-        if (glm::dot(x, out_local[k]) > 1e-9 * glm::length(x) * out_length) return;
+        // (The right side is never negative: no length is needed where the left is not positive.)
+        const double outward = glm::dot(x, out_local[k]);
+        if (outward > 0.0 && outward > 1e-9 * glm::length(x) * out_length) return;
         edge_pair(k, e, x);
     };
     // Where the polytope's triangles fit the table, each triangle normal's dot product with the
@@ -285,16 +294,18 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
         for (; four_at_a_time && t + 4 <= poly.triangle_count; t += 4) {
             __m256d nx, ny, nz;
             lanes_of_vectors(poly.triangle_normals + t, nx, ny, nz);
-            int bits[4] = {0, 0, 0, 0};
+            // The four triangles' side bytes in one word, byte j for triangle t + j (x86 is
+            // little-endian): a lane mask's bit j spread to bit 0 of byte j by a table.
+            uint32_t bytes = 0;
             for (int k = 0; k < 3; ++k) {
                 const __m256d d =
                     lanes_dot(nx, ny, nz, lanes_of(e_local[k].x), lanes_of(e_local[k].y), lanes_of(e_local[k].z));
                 _mm256_storeu_pd(along[k] + t, d);
                 const int above = _mm256_movemask_pd(_mm256_cmp_pd(d, lanes_of(tol[k]), _CMP_GT_OQ));
                 const int below = _mm256_movemask_pd(_mm256_cmp_pd(d, lanes_of(-tol[k]), _CMP_LT_OQ));
-                for (int j = 0; j < 4; ++j) bits[j] |= ((above >> j & 1) | (below >> j & 1) << 1) << 2 * k;
+                bytes |= (kLaneBytes[above] | kLaneBytes[below] << 1) << 2 * k;
             }
-            for (int j = 0; j < 4; ++j) sides[t + j] = uint8_t(bits[j]);
+            std::memcpy(sides + t, &bytes, sizeof bytes);
         }
 #endif
         for (; t < poly.triangle_count; ++t) {
