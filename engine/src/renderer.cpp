@@ -1443,6 +1443,42 @@ void remove_covered_atoms(const ZoneCover& c, int count, Workspace& w) {
     w.atom_count = kept;
 }
 
+// An E-E atom's pair (Type 2, on the dynamic plane of eq. 7): tool edge a0-a1 and object edge
+// from v0 along eo (eo2 its squared length, bisector the sum of its faces' normals).
+struct EdgePair {
+    double sign = 1.0;    // the atom's orientation of u
+    Vec3 u{0.0};          // eo x (a1 - a0)
+    double u_length = 0.0;
+    double behind = 0.0;  // how far the tool edge is in front of the object edge (m; < 0 behind)
+};
+
+// Whether the pair makes an atom: the closest points lie inside both edges (at an end of either,
+// most pairs, a vertex's atom holds instead) within `far`, the edges are not near-parallel (the
+// plane of eq. 7 is undefined there; the vertices' atoms hold), and the tool edge is not behind
+// the object edge by more than `back` (across the solid from it: not a contact).
+inline bool edge_pair(const Vec3& a0, const Vec3& a1, const Vec3& v0, const Vec3& eo, double eo2, const Vec3& bisector,
+                      double far, double back, EdgePair& p) {
+    const Vec3 et = a1 - a0;
+    const double ee = glm::dot(et, et);
+    double s, t;
+    closest_segment_params(et, eo, a0 - v0, ee, eo2, s, t);
+    if (s <= 1e-9 || s >= 1.0 - 1e-9 || t <= 1e-9 || t >= 1.0 - 1e-9) return false;
+    if (glm::length((a0 + s * et) - (v0 + t * eo)) > far) return false;
+    p.u = glm::cross(eo, et);
+    p.u_length = glm::length(p.u);
+    if (p.u_length < 1e-3 * glm::length(eo) * glm::length(et)) return false;
+    const double ub = glm::dot(p.u, bisector);
+    if (std::abs(ub) > 1e-6 * p.u_length * glm::length(bisector)) {
+        p.sign = ub > 0.0 ? 1.0 : -1.0;
+    } else {
+        const double g = glm::dot(p.u, a0 - v0);
+        if (g == 0.0) return false;
+        p.sign = g > 0.0 ? 1.0 : -1.0;
+    }
+    p.behind = p.sign * glm::dot(p.u / p.u_length, a0 - v0);
+    return !(p.behind < -back);
+}
+
 // gather: the principal-contact atoms of every feature pair within `reach`. The tool may be inside
 // a compliant object by as deep as it is at the base (Workspace::soft) plus the reach: that
 // object's features stay in play that far behind their surface. False when a tool vertex's
@@ -1857,31 +1893,13 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             const Vec3 gap = off - along * line.along;
             if (glm::dot(gap, gap) > near_o * near_o) continue;
             if (glm::dot(gap, gap) < covered_l * covered_l) continue;
-            // Closest points at an end of either edge (most pairs): a vertex's atom, not this one.
-            const Vec3& a0 = w.tool_world[tool.edges[te][0]];
-            const Vec3& a1 = w.tool_world[tool.edges[te][1]];
-            const Vec3 et = a1 - a0;
-            const double ee = glm::dot(et, et);
-            double s, t;
-            closest_segment_params(et, eo, a0 - v0, ee, eo2, s, t);
-            if (s <= 1e-9 || s >= 1.0 - 1e-9 || t <= 1e-9 || t >= 1.0 - 1e-9) continue;
-            if (glm::length((a0 + s * et) - (v0 + t * eo)) > far) continue;
-            const Vec3 u = glm::cross(eo, et);
-            const double ul = glm::length(u);
-            // Near-parallel edges: the plane of eq. 7 is undefined; the vertices' atoms hold.
-            if (ul < 1e-3 * glm::length(eo) * glm::length(et)) continue;
-            const double ub = glm::dot(u, bisector);
-            double sign;
-            if (std::abs(ub) > 1e-6 * ul * glm::length(bisector)) {
-                sign = ub > 0.0 ? 1.0 : -1.0;
-            } else {
-                const double g = glm::dot(u, a0 - v0);
-                if (g == 0.0) continue;
-                sign = g > 0.0 ? 1.0 : -1.0;
-            }
-            // The tool edge behind the object edge is across the solid from it: not a contact.
-            const double behind = sign * glm::dot(u / ul, a0 - v0);
-            if (behind < -back_of(feature_object(w.oedges[i]))) continue;
+            EdgePair pair;
+            if (!edge_pair(w.tool_world[tool.edges[te][0]], w.tool_world[tool.edges[te][1]], v0, eo, eo2, bisector, far,
+                           back_of(feature_object(w.oedges[i])), pair))
+                continue;
+            const double behind = pair.behind, sign = pair.sign;
+            const Vec3& u = pair.u;
+            const double ul = pair.u_length;
             // In front of a compliant object's edge, as in front of a rigid one, only within the
             // reach (`far` reaches further only behind it).
             if (obj.compliant && behind > reach && model.settings.drop_covered_atoms) continue;
@@ -3095,6 +3113,7 @@ void rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
                     const Convexity cv = obj.topology.vertex_convexity[ov];
                     if ((cv == Convexity::Convex || cv == Convexity::Mixed) && replacing_count < kMaxReplacing)
                         replacing[replacing_count++] = face_atom(a.object, ov, tool.vertex_piece[te[0]]);
+                }
                 }
             } else if (!vertex_atoms(a.tool_vertex)) {
                 return;
