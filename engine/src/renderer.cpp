@@ -3113,7 +3113,26 @@ void rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
                     const Convexity cv = obj.topology.vertex_convexity[ov];
                     if ((cv == Convexity::Convex || cv == Convexity::Mixed) && replacing_count < kMaxReplacing)
                         replacing[replacing_count++] = face_atom(a.object, ov, tool.vertex_piece[te[0]]);
-                }
+                    // And the tool edge against the vertex's other convex edges, as gather pairs
+                    // them: a tool edge laid across a ridge of short edges slides from one to the
+                    // next.
+                    const Vec3 a0 = at.p + at.R * tool.mesh.vertices[te[0]], a1 = at.p + at.R * tool.mesh.vertices[te[1]];
+                    for (uint32_t j = obj.topology.vertex_edge_offsets[ov]; j < obj.topology.vertex_edge_offsets[ov + 1]; ++j) {
+                        const uint32_t oe = obj.topology.vertex_edges[j];
+                        const MeshEdge& next = obj.topology.edges[oe];
+                        if (oe == a.object_edge || next.convexity != Convexity::Convex) continue;
+                        const Vec3& v0 = obj.mesh.vertices[next.v[0]];
+                        const Vec3 eo = obj.mesh.vertices[next.v[1]] - v0;
+                        const Vec3 bisector =
+                            obj.topology.triangle_normals[next.tri[0]] + obj.topology.triangle_normals[next.tri[1]];
+                        EdgePair pair;
+                        if (!edge_pair(a0, a1, v0, eo, glm::dot(eo, eo), bisector, reach, kBackFace, pair)) continue;
+                        if (replacing_count == kMaxReplacing) break;
+                        Atom ee = a;
+                        ee.object_edge = oe;
+                        ee.sign = pair.sign;
+                        replacing[replacing_count++] = ee;
+                    }
                 }
             } else if (!vertex_atoms(a.tool_vertex)) {
                 return;
