@@ -1378,7 +1378,9 @@ struct ZoneCover {
 // plane, whose value is that distance; a concave one gives nothing that far off. Such a feature
 // need not be looked at. A flat edge may give the plane of its faces, which the vertex may be
 // behind.
-bool leaves_out_far_plane(const Model& model, const FeatureKey& k, const Vec3& wa, double distance, double far_plane) {
+// (Inlined: gather asks it of every edge and vertex feature of the tissue it finds.)
+[[gnu::always_inline]] inline bool leaves_out_far_plane(const Model& model, const FeatureKey& k, const Vec3& wa,
+                                                        double distance, double far_plane) {
     if (!(distance > far_plane) || k.type == 0) return false;
     const ModelObject& obj = model.objects[k.object];
     if (k.type == 2) return true;
@@ -1534,6 +1536,9 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         cross_world[k][1] = base.orientation * tool.pieces[k].cross_w;
     }
     const double axial_slack = 1e-9 + 1e-12 * (glm::length(base.position) + tool.radius_m);
+    // A feature plane (an atom whose value is the distance) further than this cannot hold
+    // (ZoneCover); 0: none is left out.
+    const double far_plane = model.settings.drop_covered_atoms ? cover.far_plane() : 1e300;
     for (int i = 0; i < w.near_count; ++i) {
         const NearTri nt = w.near[i];
         const ModelObject& obj = model.objects[nt.object];
@@ -1613,6 +1618,11 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             if (c.distance > far) continue;
             const FeatureKey key = feature_key(obj, nt.object, nt.tri, uint32_t(a), c.region);
             if (obj.compliant) {
+                // An edge or vertex feature of a compliant object is used only by a vertex outside
+                // it (behind none of the faces over it), and left out there when it gives no atom
+                // that can hold (leaves_out_far_plane): passed over at once.
+                if (key.type != 0 && leaves_out_far_plane(model, key, w.tool_world[a], c.distance, far_plane))
+                    continue;
                 // Sorted out below: the tool may be inside a compliant object.
                 if (w.inside_count < kMaxFeatures)
                     w.inside[w.inside_count++] =
@@ -1649,9 +1659,6 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                 for (int k = i; k > w.inside_first[a] && in[k].key.object < in[k - 1].key.object; --k)
                     std::swap(in[k], in[k - 1]);
         const bool pushed = glm::dot(push, push) > 0.0;
-        // A feature plane (an atom whose value is the distance) further than this cannot hold
-        // (ZoneCover); 0: none is left out.
-        const double far_plane = model.settings.drop_covered_atoms ? cover.far_plane() : 1e300;
         int i = 0;
         while (i < w.inside_count) {
             int j = i;
@@ -1659,9 +1666,9 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             while (j < w.inside_count && in[j].key.a == in[i].key.a && in[j].key.object == in[i].key.object)
                 inside |= in[j++].behind;
             if (!inside) {
+                // (Those leaves_out_far_plane leaves out were never listed.)
                 for (int k = i; k < j; ++k)
-                    if (leaves_out_far_plane(model, in[k].key, w.tool_world[in[k].key.a], in[k].distance, far_plane)) continue;
-                    else if (w.feat_count < kMaxFeatures) w.feats[w.feat_count++] = in[k].key;
+                    if (w.feat_count < kMaxFeatures) w.feats[w.feat_count++] = in[k].key;
                     else w.gather_full = true;
             } else {
                 int best = -1;
