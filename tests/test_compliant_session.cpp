@@ -117,6 +117,22 @@ TEST(CompliantSession, DrawnOutTheProbeRisesWithTheHandAndLeavesTheTissue) {
     EXPECT_EQ(truncated, 0);
 }
 
+// The session stepped tick by tick with settings `a` and `b` side by side: `each(ra, rb)` sees
+// every tick's two results.
+template <class Each>
+void step_side_by_side(const cli::BenchScene& b, const RendererSettings& a, const RendererSettings& bs, Each&& each) {
+    ModelBuild mb_a = session_model(b, a);
+    ModelBuild mb_b = session_model(b, bs);
+    ASSERT_TRUE(mb_a.model) << mb_a.error;
+    ASSERT_TRUE(mb_b.model) << mb_b.error;
+    State s_a = make_state(b.ticks.front()), s_b = make_state(b.ticks.front());
+    for (const Pose& tick : b.ticks) {
+        const StepResult ra = step(*mb_a.model, s_a, tick);
+        const StepResult rb = step(*mb_b.model, s_b, tick);
+        each(ra, rb);
+    }
+}
+
 // Leaning in the tissue, the guard finds some sixty gingiva triangles the atoms let the shank
 // into. It takes all of them at once, so each candidate is solved at most twice (its first QP,
 // and once more with their separating planes: the linearization itself converges at once here).
@@ -130,17 +146,10 @@ TEST(CompliantSession, OneGuardRoundPerCandidateAndIdleCandidatesLeftOut) {
     all.skip_idle_candidates = false;
     RendererSettings skip = all;
     skip.skip_idle_candidates = true;
-    ModelBuild mb_all = session_model(b, all);
-    ModelBuild mb_skip = session_model(b, skip);
-    ASSERT_TRUE(mb_all.model) << mb_all.error;
-    ASSERT_TRUE(mb_skip.model) << mb_skip.error;
-    State s_all = make_state(b.ticks.front()), s_skip = make_state(b.ticks.front());
     long solved_all = 0, solved_skip = 0, with_planes = 0;
     int statuses_differ = 0, over_two_solves_per_candidate = 0;
     double max_dp = 0.0, max_dq = 0.0, max_df = 0.0;
-    for (size_t i = 0; i < b.ticks.size(); ++i) {
-        const StepResult ra = step(*mb_all.model, s_all, b.ticks[i]);
-        const StepResult rs = step(*mb_skip.model, s_skip, b.ticks[i]);
+    step_side_by_side(b, all, skip, [&](const StepResult& ra, const StepResult& rs) {
         solved_all += ra.stats.candidates;
         solved_skip += rs.stats.candidates;
         with_planes += rs.stats.atoms > rs.stats.atoms_gathered;
@@ -149,7 +158,8 @@ TEST(CompliantSession, OneGuardRoundPerCandidateAndIdleCandidatesLeftOut) {
         max_dp = std::max(max_dp, glm::length(ra.graphic.position - rs.graphic.position));
         max_dq = std::max(max_dq, glm::length(ra.graphic.orientation - rs.graphic.orientation));
         max_df = std::max(max_df, glm::length(ra.force_N - rs.force_N));
-    }
+    });
+    if (HasFatalFailure()) return;
     EXPECT_EQ(over_two_solves_per_candidate, 0);
     EXPECT_GT(with_planes, 1000);  // the guard's planes are common here
     // The same answers to rounding: where a left-out candidate reaches the default set's answer
@@ -173,22 +183,16 @@ TEST(CompliantSession, CandidatesOfNoUseAreGivenUpBeforeTheirGuard) {
     guarded.give_up_early = false;
     RendererSettings early = guarded;
     early.give_up_early = true;
-    ModelBuild mb_guarded = session_model(b, guarded);
-    ModelBuild mb_early = session_model(b, early);
-    ASSERT_TRUE(mb_guarded.model) << mb_guarded.error;
-    ASSERT_TRUE(mb_early.model) << mb_early.error;
-    State s_guarded = make_state(b.ticks.front()), s_early = make_state(b.ticks.front());
     long tested_guarded = 0, tested_early = 0;
     int differ = 0;
-    for (size_t i = 0; i < b.ticks.size(); ++i) {
-        const StepResult rg = step(*mb_guarded.model, s_guarded, b.ticks[i]);
-        const StepResult re = step(*mb_early.model, s_early, b.ticks[i]);
+    step_side_by_side(b, guarded, early, [&](const StepResult& rg, const StepResult& re) {
         tested_guarded += rg.stats.triangles_tested;
         tested_early += re.stats.triangles_tested;
         differ += rg.status != re.status || rg.graphic.position != re.graphic.position ||
                   rg.graphic.orientation != re.graphic.orientation || rg.force_N != re.force_N ||
                   rg.torque_Nm != re.torque_Nm;
-    }
+    });
+    if (HasFatalFailure()) return;
     EXPECT_EQ(differ, 0);
     EXPECT_LT(tested_early, tested_guarded);
 }

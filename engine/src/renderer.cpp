@@ -1537,7 +1537,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
     }
     const double axial_slack = 1e-9 + 1e-12 * (glm::length(base.position) + tool.radius_m);
     // A feature plane (an atom whose value is the distance) further than this cannot hold
-    // (ZoneCover); 0: none is left out.
+    // (ZoneCover); 1e300 without drop_covered_atoms: none is left out.
     const double far_plane = model.settings.drop_covered_atoms ? cover.far_plane() : 1e300;
     for (int i = 0; i < w.near_count; ++i) {
         const NearTri nt = w.near[i];
@@ -1907,22 +1907,19 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                            pair) ||
                 pair.behind < -back_of(feature_object(w.oedges[i])))
                 continue;
-            const double behind = pair.behind, sign = pair.sign;
-            const Vec3& u = pair.u;
-            const double ul = pair.u_length;
             // In front of a compliant object's edge, as in front of a rigid one, only within the
             // reach (`far` reaches further only behind it).
-            if (obj.compliant && behind > reach && model.settings.drop_covered_atoms) continue;
-            if (std::abs(behind) < covered) continue;
+            if (obj.compliant && pair.behind > reach && model.settings.drop_covered_atoms) continue;
+            if (std::abs(pair.behind) < covered) continue;
             // Inside a compliant object: only an edge pressed the way the object pushes back
             // holds the tool (not one that is in by going past the side of a corner).
-            if (obj.compliant && behind < -kBackFace && !along_push(sign * u / ul)) continue;
+            if (obj.compliant && pair.behind < -kBackFace && !along_push(pair.sign * pair.u / pair.u_length)) continue;
             Atom at;
             at.kind = AtomKind::EdgeEdge;
             at.object = feature_object(w.oedges[i]);
             at.object_edge = feature_id(w.oedges[i]);
             at.tool_edge = static_cast<uint32_t>(te);
-            at.sign = sign;
+            at.sign = pair.sign;
             add_atom(w, at);
         }
     }
