@@ -934,12 +934,17 @@ bool gather_near(const Model& model, const Pose& at, const Vec3* tool_world, con
                                  ? piece_superset(model, cache, k, at, axis, reach, tol)
                                  : nullptr;
         int cursor = 0;  // pc's entries are grouped by object, in object order
+        // The piece's box inflated for a compliant object and for a rigid one, once for all the
+        // objects: made afresh for each, the box went through the stack in halves and came back
+        // whole, a stall on every object (some 3 % of a tissue tick).
+        Aabb box_all = box, box_reach = box;
+        box_all.inflate(reach_all);
+        box_reach.inflate(reach);
         for (size_t o = 0; o < model.objects.size(); ++o) {
             const ModelObject& obj = model.objects[o];
             const uint16_t ok = static_cast<uint16_t>(o);
             if (obj.compliant || piece.capsule_count == 0) {
-                Aabb b = box;
-                b.inflate(obj.compliant ? reach_all : reach);
+                const Aabb& b = obj.compliant ? box_all : box_reach;
                 // Most objects are nowhere near the piece: their hierarchy's root says so here.
                 const auto& nodes = obj.bvh.nodes();
                 if (nodes.empty() || !nodes[0].box.overlaps(b)) continue;
