@@ -387,3 +387,64 @@ TEST(SegmentClosest, FourAtATimeLeaveOpenWhatOneAtATimeDoes) {
 
 }  // namespace
 }  // namespace sulcus
+
+namespace sulcus {
+namespace {
+
+// root_exceeds(x, f) answers as the rounded root's comparison sqrt(x) > f does, for x drawn
+// round f squared to within a few ulps (where the band needs the root), across twenty orders of
+// magnitude and far from it, and for NaN and infinite x.
+TEST(RootExceeds, AnswersAsTheRoundedRootDoes) {
+    std::mt19937_64 rng(20261206);
+    std::uniform_real_distribution<double> exponent(-12.0, 8.0), unit(0.5, 2.0);
+    long checked = 0, near = 0;
+    for (int i = 0; i < 200000; ++i) {
+        const double f = std::pow(10.0, exponent(rng)) * unit(rng);
+        double x = f * f;
+        // Step x by up to 40 ulps either way of f squared, or scale it well away.
+        if (i % 4 != 0) {
+            const int steps = int(rng() % 81) - 40;
+            for (int k = 0; k < std::abs(steps); ++k) x = std::nextafter(x, steps > 0 ? HUGE_VAL : 0.0);
+            ++near;
+        } else {
+            x *= unit(rng) * unit(rng);
+        }
+        EXPECT_EQ(root_exceeds(x, f), std::sqrt(x) > f) << "x " << x << " f " << f;
+        ++checked;
+    }
+    EXPECT_GT(near, 100000);
+    EXPECT_FALSE(root_exceeds(std::nan(""), 1e-3));
+    EXPECT_TRUE(root_exceeds(HUGE_VAL, 1e-3));
+    EXPECT_FALSE(root_exceeds(0.0, 1e-3));
+    EXPECT_EQ(checked, 200000);
+}
+
+// closest_on_triangle_within gives closest_on_triangle's point, feature and distance wherever
+// that distance is within the bound (to the bit), and false wherever it is beyond: points
+// round a triangle in every feature's region, and bounds at and a rounding either side of the
+// distance.
+TEST(RootExceeds, TheTriangleTestWithinABoundIsTheTriangleTest) {
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> coord(-2e-3, 2e-3);
+    const Vec3 a(0.0, 0.0, 0.0), b(1e-3, 0.1e-3, 0.0), c(0.2e-3, 0.9e-3, 0.3e-3);
+    int regions[7] = {};
+    for (int i = 0; i < 100000; ++i) {
+        const Vec3 p(coord(rng), coord(rng), coord(rng));
+        const TriClosest full = closest_on_triangle(p, a, b, c);
+        ++regions[int(full.region)];
+        for (const double within : {full.distance, std::nextafter(full.distance, 0.0),
+                                    std::nextafter(full.distance, HUGE_VAL), 0.5 * full.distance, 2.0 * full.distance}) {
+            TriClosest r;
+            const bool in = closest_on_triangle_within(p, a, b, c, within, r);
+            ASSERT_EQ(in, !(full.distance > within)) << i;
+            if (!in) continue;
+            EXPECT_EQ(r.region, full.region);
+            EXPECT_EQ(r.distance, full.distance);
+            EXPECT_EQ(r.point, full.point);
+        }
+    }
+    for (int k = 0; k < 7; ++k) EXPECT_GT(regions[k], 100) << "region " << k;
+}
+
+}  // namespace
+}  // namespace sulcus

@@ -8,9 +8,11 @@
 
 namespace sulcus {
 
-TriClosest closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+namespace {
+
+// closest_on_triangle's point and feature, without the distance.
+inline void closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, TriClosest& r) {
     // Voronoi regions of the triangle, tested in turn (vertex, edge, face).
-    TriClosest r;
     const Vec3 ab = b - a, ac = c - a, ap = p - a;
     const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
     if (d1 <= 0.0 && d2 <= 0.0) {
@@ -46,8 +48,25 @@ TriClosest closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
             r.region = TriRegion::Face;
         }
     }
+}
+
+}  // namespace
+
+TriClosest closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+    TriClosest r;
+    closest_point_on_triangle(p, a, b, c, r);
     r.distance = glm::length(p - r.point);
     return r;
+}
+
+bool closest_on_triangle_within(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, double within,
+                                TriClosest& r) {
+    closest_point_on_triangle(p, a, b, c, r);
+    const Vec3 d = p - r.point;
+    const double d2 = glm::dot(d, d);
+    if (root_exceeds(d2, within)) return false;
+    r.distance = std::sqrt(d2);
+    return true;
 }
 
 SegmentClosest closest_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {

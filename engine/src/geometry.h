@@ -28,6 +28,23 @@ struct TriClosest {
 // Closest point of triangle (a, b, c) to p, with the feature it lies on.
 TriClosest closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
 
+// Whether sqrt(x) > f, as the rounded root compares, for f > 0: decided without the root where x
+// is further than a part in 2^50 from f squared (there the root is more than half an ulp of f
+// from f, and no rounding turns the answer), by the root itself only within that band. A NaN x
+// gives false, as the root's comparison does.
+inline bool root_exceeds(double x, double f) {
+    const double f2 = f * f;
+    if (x > f2 * (1.0 + 0x1p-49)) return true;
+    if (x < f2 * (1.0 - 0x1p-49)) return false;
+    return std::sqrt(x) > f;
+}
+
+// closest_on_triangle(p, a, b, c) where its distance is no more than `within` (false, and `r`
+// without its distance, where it is): the same point, feature and distance, but no square root
+// for a point clearly further (root_exceeds).
+bool closest_on_triangle_within(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, double within,
+                                TriClosest& r);
+
 struct SegmentClosest {
     double s = 0.0, t = 0.0;  // parameters on [p0,p1] and [q0,q1]
     double distance = 0.0;

@@ -1472,7 +1472,8 @@ struct EdgePair {
     double s, t;
     closest_segment_params(et, eo, a0 - v0, ee, eo2, s, t);
     if (s <= 1e-9 || s >= 1.0 - 1e-9 || t <= 1e-9 || t >= 1.0 - 1e-9) return false;
-    if (glm::length((a0 + s * et) - (v0 + t * eo)) > far) return false;
+    const Vec3 gap = (a0 + s * et) - (v0 + t * eo);
+    if (root_exceeds(glm::dot(gap, gap), far)) return false;
     p.u = glm::cross(eo, et);
     p.u_length = glm::length(p.u);
     if (p.u_length < 1e-3 * glm::length(eo) * glm::length(et)) return false;
@@ -1619,8 +1620,8 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             if (plane > reach || plane < -back) continue;
             const Vec3 off = w.tool_world[a] - ts.centre;
             if (glm::dot(off, off) > sphere * sphere) continue;
-            const TriClosest c = closest_on_triangle(w.tool_world[a], p0, p1, p2);
-            if (c.distance > far) continue;
+            TriClosest c;
+            if (!closest_on_triangle_within(w.tool_world[a], p0, p1, p2, far, c)) continue;
             const FeatureKey key = feature_key(obj, nt.object, nt.tri, uint32_t(a), c.region);
             if (obj.compliant) {
                 // An edge or vertex feature of a compliant object is used only by a vertex outside
