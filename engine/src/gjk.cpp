@@ -138,14 +138,15 @@ Vec3 closest_simplex(Simplex& s, bool& inside) {
     return closest_tetrahedron(s, inside);
 }
 
-GjkSimplex names_of(const Simplex& s) {
-    GjkSimplex g;
+// Written field by field where it is kept: a simplex made on the stack and copied there was
+// read back in wider pieces than it was written in, a stall at every iteration of the search.
+void set_names(GjkSimplex& g, const Simplex& s) {
+    g = GjkSimplex{};
     g.count = static_cast<uint8_t>(s.n);
     for (int k = 0; k < s.n; ++k) {
         g.poly[k] = s.p[k].ia;
         g.tri[k] = s.p[k].ib;
     }
-    return g;
 }
 
 // The polytope and the triangle touch or overlap (the simplex holds the origin).
@@ -153,7 +154,7 @@ DistanceBounds& touching(DistanceBounds& r, const Simplex& s) {
     r.lower = r.upper = 0.0;
     r.direction = Vec3(0.0);
     r.direction_gap = -1e300;
-    r.simplex = names_of(s);
+    set_names(r.simplex, s);
     return r;
 }
 
@@ -212,12 +213,12 @@ DistanceBounds distance_bounds(const ConvexView& poly, const Vec3& a, const Vec3
         // earlier simplex's closest point (points of D, with room for the rounding of taking
         // them at this pose).
         r.upper = glm::length(v) * (1.0 + 1e-12) + 1e-15;
-        r.simplex = names_of(s);
+        set_names(r.simplex, s);
         return r;
     }
     for (int it = 0; it < max_iterations; ++it) {
         r.iterations = it + 1;
-        r.simplex = names_of(s);
+        set_names(r.simplex, s);
         const double vv = glm::dot(v, v);
         if (vv == 0.0) return touching(r, s);
         const double vl = std::sqrt(vv);
