@@ -385,19 +385,13 @@ TEST(SegmentClosest, FourAtATimeLeaveOpenWhatOneAtATimeDoes) {
     EXPECT_GT(settled_total, 3000);
 }
 
-}  // namespace
-}  // namespace sulcus
-
-namespace sulcus {
-namespace {
-
 // root_exceeds(x, f) answers as the rounded root's comparison sqrt(x) > f does, for x drawn
 // round f squared to within a few ulps (where the band needs the root), across twenty orders of
 // magnitude and far from it, and for NaN and infinite x.
 TEST(RootExceeds, AnswersAsTheRoundedRootDoes) {
     std::mt19937_64 rng(20261206);
     std::uniform_real_distribution<double> exponent(-12.0, 8.0), unit(0.5, 2.0);
-    long checked = 0, near = 0;
+    long near = 0;
     for (int i = 0; i < 200000; ++i) {
         const double f = std::pow(10.0, exponent(rng)) * unit(rng);
         double x = f * f;
@@ -410,13 +404,11 @@ TEST(RootExceeds, AnswersAsTheRoundedRootDoes) {
             x *= unit(rng) * unit(rng);
         }
         EXPECT_EQ(root_exceeds(x, f), std::sqrt(x) > f) << "x " << x << " f " << f;
-        ++checked;
     }
     EXPECT_GT(near, 100000);
     EXPECT_FALSE(root_exceeds(std::nan(""), 1e-3));
     EXPECT_TRUE(root_exceeds(HUGE_VAL, 1e-3));
     EXPECT_FALSE(root_exceeds(0.0, 1e-3));
-    EXPECT_EQ(checked, 200000);
 }
 
 // closest_on_triangle_within gives closest_on_triangle's point, feature and distance wherever

@@ -1461,9 +1461,9 @@ struct EdgePair {
 
 // Whether the pair may make an atom: the closest points lie inside both edges (at an end of
 // either, most pairs, a vertex's atom holds instead) within `far`, and the edges are not
-// near-parallel (the plane of eq. 7 is undefined there; the vertices' atoms hold). It does unless
-// the tool edge is too far behind the object edge (`behind`): across the solid from it, not a
-// contact.
+// near-parallel (the plane of eq. 7 is undefined there; the vertices' atoms hold). The caller
+// leaves out a pair whose tool edge is too far behind the object edge (`behind`): across the
+// solid from it, not a contact.
 // (Inlined: gather tests some ten thousand pairs a tick.)
 [[gnu::always_inline]] inline bool edge_pair(const Vec3& a0, const Vec3& a1, const Vec3& v0, const Vec3& eo,
                                              double eo2, const Vec3& bisector, double far, EdgePair& p) {

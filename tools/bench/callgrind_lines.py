@@ -23,13 +23,51 @@ import subprocess
 import sys
 
 
+def inline_chains(binary, addresses):
+    """Each address's chain of (function, file:line) frames from addr2line -i, innermost first."""
+    text = subprocess.run(['addr2line', '-a', '-i', '-f', '-C', '-e', binary],
+                          input='\n'.join(hex(a) for a in addresses), capture_output=True, text=True,
+                          check=True).stdout.split('\n')
+    chains = {}
+    current = None
+    i = 0
+    while i < len(text):
+        entry = text[i]
+        if entry.startswith('0x'):
+            current = int(entry, 16)
+            chains[current] = []
+            i += 1
+        elif entry and i + 1 < len(text) and current is not None:
+            chains[current].append((entry, text[i + 1]))
+            i += 2
+        else:
+            i += 1
+    return chains
+
+
+def cost_per_line(binary, cost, source, first, last, chains=None):
+    """cost (per address of `binary`) charged to the innermost frame in `source` between lines
+    first and last, per line; `chains` from inline_chains if already at hand."""
+    if chains is None:
+        chains = inline_chains(binary, sorted(cost))
+    source_abs = os.path.abspath(source)
+    per_line = collections.Counter()
+    for address, frames in chains.items():
+        for _function, location in frames:
+            path, _, number = location.rpartition(':')
+            number = number.split()[0] if number else ''
+            if number.isdigit() and os.path.abspath(path) == source_abs and first <= int(number) <= last:
+                per_line[int(number)] += cost[address]
+                break
+    return per_line
+
+
 def main():
     if len(sys.argv) < 6:
         sys.exit(__doc__)
     out, binary, source, first, last = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4]), int(sys.argv[5])
     top = int(sys.argv[6]) if len(sys.argv) > 6 else 40
     target = os.path.basename(binary)
-    source_abs = os.path.abspath(source)
     cost = collections.Counter()
     names = {}
 
@@ -75,39 +113,7 @@ def main():
     if not cost:
         sys.exit(f'callgrind_lines.py: {out}: no instructions of {target} (written with --dump-instr=yes?)')
 
-    addresses = sorted(cost)
-    text = subprocess.run(['addr2line', '-a', '-i', '-f', '-C', '-e', binary],
-                          input='\n'.join(hex(a) for a in addresses), capture_output=True, text=True,
-                          check=True).stdout.split('\n')
-    per_line = collections.Counter()
-    current = None
-    frames = []
-
-    def charge():
-        if current is None:
-            return
-        # addr2line lists the innermost frame first.
-        for _function, location in frames:
-            path, _, number = location.rpartition(':')
-            number = number.split()[0] if number else ''
-            if number.isdigit() and os.path.abspath(path) == source_abs and first <= int(number) <= last:
-                per_line[int(number)] += cost[current]
-                return
-
-    i = 0
-    while i < len(text):
-        entry = text[i]
-        if entry.startswith('0x'):
-            charge()
-            current = int(entry, 16)
-            frames = []
-            i += 1
-        elif entry and i + 1 < len(text):
-            frames.append((entry, text[i + 1]))
-            i += 2
-        else:
-            i += 1
-    charge()
+    per_line = cost_per_line(binary, cost, source, first, last)
 
     lines = open(source).read().split('\n')
     print(f'total {sum(per_line.values()) / 1e6:.1f} M instructions on {source} lines {first}-{last}')

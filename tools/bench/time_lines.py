@@ -9,7 +9,7 @@ than its instructions, and a change that removes instructions the processor ran 
 gains nothing. This reads a `perf record -e cpu-clock` profile (timer sampling, which a virtual
 machine without hardware counters still has), maps each sample's address to its chain of inlined
 frames (addr2line -i) and charges it to the innermost frame in SOURCE between lines FIRST and LAST,
-as callgrind_lines.py does for instructions.
+with callgrind_lines.py's own charging, as it does for instructions.
 
     perf record -e cpu-clock -F 20000 -o perf.data \\
         build/bin/sulcus-cli bench quadrant_two_regions --runs 6 --check-every 0
@@ -26,6 +26,9 @@ import os
 import re
 import subprocess
 import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from callgrind_lines import cost_per_line, inline_chains  # noqa: E402
 
 
 def samples_by_address(data, binary):
@@ -51,28 +54,6 @@ def samples_by_address(data, binary):
         if symbol in symbols:
             counts[symbols[symbol] + offset] += n
     return total, counts
-
-
-def inline_chains(binary, addresses):
-    """Each address's chain of (function, file:line) frames, innermost first."""
-    text = subprocess.run(['addr2line', '-a', '-i', '-f', '-C', '-e', binary],
-                          input='\n'.join(hex(a) for a in addresses), capture_output=True, text=True,
-                          check=True).stdout.split('\n')
-    chains = {}
-    current = None
-    i = 0
-    while i < len(text):
-        entry = text[i]
-        if entry.startswith('0x'):
-            current = int(entry, 16)
-            chains[current] = []
-            i += 1
-        elif entry and i + 1 < len(text) and current is not None:
-            chains[current].append((entry, text[i + 1]))
-            i += 2
-        else:
-            i += 1
-    return chains
 
 
 STACK = re.compile(r'(-?0x[0-9a-f]+|)\((%r[bs]p)\)')
@@ -115,6 +96,14 @@ def forward_failures(binary, counts, least):
             text[address] = m.group(2)
             order.append(address)
     place = {a: i for i, a in enumerate(order)}
+    def move(k):
+        """(instruction, source operand, destination operand) of a two-operand instruction."""
+        m = re.match(r'(\S+)\s+(.*)', text[order[k]])
+        if not m:
+            return None
+        args = m.group(2).split(',')
+        return (m.group(1), args[0].strip(), args[1].strip()) if len(args) == 2 else None
+
     found = []
     for address, n in counts.items():
         if n < least or address not in place:
@@ -122,27 +111,19 @@ def forward_failures(binary, counts, least):
         p = place[address]
         hit = None
         for j in range(max(0, p - 3), p + 1):
-            m = re.match(r'(\S+)\s+(.*)', text[order[j]])
-            if not m:
-                continue
-            args = m.group(2).split(',')
-            if len(args) != 2 or not args[1].strip().startswith('%'):
-                continue
-            source = stack_slot(args[0])
+            load = move(j)
+            source = stack_slot(load[1]) if load and load[2].startswith('%') else None
             if not source:
                 continue
-            load_width = width(m.group(1), args[1].strip())
+            load_width = width(load[0], load[2])
             for k in range(j - 1, max(0, j - 14) - 1, -1):
-                m2 = re.match(r'(\S+)\s+(.*)', text[order[k]])
-                if not m2:
+                store = move(k)
+                if not store or not store[1].startswith('%'):
                     continue
-                args2 = m2.group(2).split(',')
-                if len(args2) != 2 or not args2[0].strip().startswith('%'):
-                    continue
-                target = stack_slot(args2[1])
+                target = stack_slot(store[2])
                 if not target or target[0] != source[0]:
                     continue
-                store_width = width(m2.group(1), args2[0].strip())
+                store_width = width(store[0], store[1])
                 s, l = target[1], source[1]
                 overlaps = s < l + load_width and l < s + store_width
                 covers = s <= l and s + store_width >= l + load_width
@@ -165,15 +146,7 @@ def main():
     if not counts:
         sys.exit(f'time_lines.py: {data}: no samples in {binary}')
     chains = inline_chains(binary, sorted(counts))
-    source_abs = os.path.abspath(source)
-    per_line = collections.Counter()
-    for address, frames in chains.items():
-        for _function, location in frames:
-            path, _, number = location.rpartition(':')
-            number = number.split()[0] if number else ''
-            if number.isdigit() and os.path.abspath(path) == source_abs and first <= int(number) <= last:
-                per_line[int(number)] += counts[address]
-                break
+    per_line = cost_per_line(binary, counts, source, first, last, chains)
     lines = open(source).read().split('\n')
     print(f'{total} samples, {sum(per_line.values())} on {source} lines {first}-{last}')
     for number, n in sorted(per_line.items(), key=lambda x: -x[1])[:top]:
@@ -182,8 +155,7 @@ def main():
     if failures:
         print('loads that may wait on a store they only partly overlap (samples, address, store, load):')
         for n, address, store, load in failures[:top]:
-            where = chains.get(address) or inline_chains(binary, [address]).get(address, [])
-            place = ' < '.join(loc.split('/')[-1] for _f, loc in where)[:80]
+            place = ' < '.join(loc.split('/')[-1] for _f, loc in chains[address])[:80]
             print(f'{n:8d} {100.0 * n / total:5.2f}% {address:#x} [{store[:40]}] [{load[:40]}] {place}')
 
 
