@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -163,6 +164,28 @@ TEST(NearCache, InterleavedSessionsRepeatTheirLoneRuns) {
 // (SeparationMemo): the two sessions lean against the root 0.3 s apart.
 TEST(NearCache, InterleavedTissueSessionsRepeatTheirLoneRuns) {
     expect_interleaved_sessions_repeat_their_lone_runs("quadrant_two_regions", 0, 2000, 300);
+}
+
+// The probe's pieces move together, and the sets of gingiva triangles round them (one per piece)
+// used to leave their boxes at the same tick: five walks of the tissue's hierarchy in one. Each is
+// now gathered anew ahead of need, one a tick, at the tick's end: along the whole session no tick
+// gathers more than two (one ahead, one where a piece outran its set's room in a single tick),
+// while the sets are gathered anew hundreds of times.
+TEST(NearCache, TissueSetsAreGatheredAheadOneATick) {
+    const cli::BenchScene b = load("quadrant_two_regions");
+    ASSERT_FALSE(b.ticks.empty());
+    const auto model = model_for(b, true);
+    State state = make_state(b.ticks.front());
+    int most = 0, total = 0, in_contact = 0;
+    for (const Pose& p : b.ticks) {
+        const StepResult r = step(*model, state, p);
+        most = std::max(most, r.stats.compliant_gathers);
+        total += r.stats.compliant_gathers;
+        in_contact += r.status == StepStatus::Contact;
+    }
+    EXPECT_GT(in_contact, 4000);
+    EXPECT_GT(total, 200);
+    EXPECT_LE(most, 2);
 }
 
 // What the guard remembers of a tissue triangle's separation (SeparationMemo) comes back at a

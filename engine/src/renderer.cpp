@@ -227,6 +227,7 @@ struct Workspace {
     Pose prior_pose;
     PieceReach prior_reach[kMaxToolPieces];
     int tests = 0;  // triangle tests of this tick (StepStats::triangles_tested)
+    int compliant_gathers = 0;  // StepStats::compliant_gathers
     int detect_tests = 0;  // detect's distance tests of this tick (judge_near)
     FeatureKey feats[kMaxFeatures];
     int feat_count = 0;
@@ -359,6 +360,7 @@ struct Workspace {
         double measured_at[kCompliantSetSlots];  // `moved` when measured (m)
         Vec3 axis[kToolCapsules + 1];     // the capsule points at the last query (world)
         double moved = 0.0;               // m
+        Aabb query;                       // the last query's box
     };
     CompliantSet compliant_sets[kCompliantSets];
     uint64_t compliant_clock = 0;
@@ -690,6 +692,56 @@ double inside_reach(const Model& model, const SoftDepths& soft, uint16_t o, doub
     return model.objects[o].compliant ? soft.of(o) + reach : 0.0;
 }
 
+// Gathers compliant set `c` anew about query box `b`: the slots whose boxes meet `b` widened by
+// Workspace::kCompliantRoom, none measured yet. False when they do not fit.
+bool gather_compliant_set(const ModelObject& obj, const Aabb& b, Workspace::CompliantSet& c) {
+    c.box = b;
+    c.box.inflate(Workspace::kCompliantRoom);
+    c.query = b;
+    c.count = 0;
+    c.moved = 0.0;
+    return obj.bvh.query_slots(c.box, [&](uint32_t slot) {
+        if (c.count == Workspace::kCompliantSetSlots) return false;
+        c.kept[c.count] = -1e300;
+        c.slots[c.count++] = slot;
+        return true;
+    });
+}
+
+// How far the last query box of set `c` is from leaving the set's box (m): its least gap to a
+// face of it.
+double compliant_room_left(const Workspace::CompliantSet& c) {
+    const Vec3 below = c.query.lo - c.box.lo, above = c.box.hi - c.query.hi;
+    return std::min(std::min(std::min(below.x, below.y), std::min(below.z, above.x)), std::min(above.y, above.z));
+}
+
+// At the end of a tick: the compliant set of this model that has the least room left, once that
+// is under kCompliantRefresh of Workspace::kCompliantRoom, gathered anew about its last query box.
+// The tool's pieces move together, and their sets left their boxes at the same tick (five walks
+// of the tissue's hierarchy and some thousand triangles measured in one tick); one a tick, ahead
+// of need, spreads them. Nothing else changes: a set whose box holds the query gives that query's
+// triangles in the same order, and those it has not measured are measured at the query.
+constexpr double kCompliantRefresh = 0.5;
+void tend_compliant_sets(const Model& model, Workspace& w) {
+    Workspace::CompliantSet* most = nullptr;
+    double least = kCompliantRefresh * Workspace::kCompliantRoom;
+    for (Workspace::CompliantSet& c : w.compliant_sets) {
+        if (c.model != model.serial || c.object >= model.objects.size()) continue;
+        const double left = compliant_room_left(c);
+        if (left < least) {
+            least = left;
+            most = &c;
+        }
+    }
+    if (!most) return;
+    const Workspace::CompliantSet& c = *most;
+    ++w.compliant_gathers;
+    if (!gather_compliant_set(model.objects[c.object], Aabb(c.query), *most)) {
+        most->model = 0;
+        most->used = 0;
+    }
+}
+
 // The triangles of `obj` whose boxes meet box `b`, for piece `pk` (a compliant object's, or any
 // object's for a piece without capsules), each with the capsules' bound (piece_compliant_bound;
 // none without capsules), in the hierarchy's order; with `any_only`, the first. False on overflow.
@@ -754,27 +806,19 @@ double inside_reach(const Model& model, const SoftDepths& soft, uint16_t o, doub
         c.model = model.serial;
         c.object = ok;
         c.piece = pk;
-        c.box = b;
-        c.box.inflate(Workspace::kCompliantRoom);
-        c.count = 0;
-        const bool fits = obj.bvh.query_slots(c.box, [&](uint32_t slot) {
-            if (c.count == Workspace::kCompliantSetSlots) return false;
-            c.kept[c.count] = -1e300;
-            c.slots[c.count++] = slot;
-            return true;
-        });
-        if (!fits) {
+        ++w.compliant_gathers;
+        if (!gather_compliant_set(obj, b, c)) {
             c.model = 0;
             c.used = 0;
             obj.bvh.query(b, visit);
             return !overflow;
         }
-        c.moved = 0.0;
         if (piece.capsule_count > 0)
             for (int j = 0; j <= piece.capsule_count; ++j) c.axis[j] = line.axis[j];
     }
     Workspace::CompliantSet& c = *set;
     c.used = ++w.compliant_clock;
+    c.query = b;
     // How far the capsules' points have moved since the last query: no point of a capsule moves
     // further than its ends (a rigid motion moves the points of a segment by the blend of its
     // ends' motions).
@@ -3192,6 +3236,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     StepResult res;
     w.tests = 0;
     w.detect_tests = 0;
+    w.compliant_gathers = 0;
 
     // Input health: a non-finite or non-unit pose is refused; the last pose is kept.
     const double qn = glm::length(haptic_in.orientation);
@@ -3428,6 +3473,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                           : w.tests <= kLightTests                       ? Load::Light
                                                                          : Load::Usual;
         tend_superset(model, cache, load);
+        if (model.any_compliant) tend_compliant_sets(model, w);
         stage_detect += micros(t0, Clock::now());
     }
     bool base_stands = false;
@@ -3534,6 +3580,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     res.stats.times.select_us = micros(t_select, t_force);
     res.stats.times.force_us = micros(t_force, t_end);
     res.stats.triangles_tested = w.tests;
+    res.stats.compliant_gathers = w.compliant_gathers;
     return res;
 }
 
