@@ -2527,15 +2527,15 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
                     std::max(d.separation, compliant ? witness : separation_witness(model, view, nt, floor, w));
             if (remember) near_cache_keep_separation(w.cache, nt.object, nt.tri, nt.piece, nt.separation_m);
         }
-        // The tool at the new pose, placed once a triangle needs it.
-        bool moved_placed = false;
-        auto place_moved = [&] {
-            if (moved_placed) return;
-            place_tool_vertices(model.tool, nx.q, nx.p, w.tool_moved);
-            place_tool_planes(model.tool, nx.q, nx.p, w.moved_face_n, w.moved_face_d);
-            place_tool_capsule(model.tool, nx.q, nx.p, w.moved_capsule);
+        // The tool's pieces at the new pose, each placed once a triangle needs it (mostly the tip
+        // and its neighbour of the probe's eleven).
+        uint32_t moved_placed = 0;
+        static_assert(kMaxToolPieces <= 32, "the pieces placed at the new pose are a 32-bit mask");
+        auto place_moved = [&](size_t k) {
+            if (moved_placed >> k & 1u) return;
+            place_tool_piece(model.tool, k, nx.q, nx.p, w.tool_moved, w.moved_face_n, w.moved_face_d, w.moved_capsule);
             w.moved_face_q = nx.q;
-            moved_placed = true;
+            moved_placed |= 1u << k;
         };
         for (int i = 0; i < w.near_count && missed < kMaxMissed; ++i) {
             const double moved_by = piece_moved_by[w.near[i].piece];
@@ -2543,8 +2543,8 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             const double give_i = triangle_zone_depth(model, w.slacks, w.near[i]);
             if (bound_settles(w.near[i], moved_by, give_i)) continue;
             if (w.near[i].separation_m - moved_by >= -(S.constraint_tol_m + give_i)) continue;
-            place_moved();
             const size_t k = w.near[i].piece;
+            place_moved(k);
             const ConvexView moved = tool_convex_view(model.tool, k, w.tool_moved, w.moved_face_n, w.moved_face_d,
                                                       &w.moved_face_q, w.moved_capsule);
             // As at the start: a compliant triangle's witnesses before GJK, a rigid one's after.

@@ -13,9 +13,11 @@ namespace sulcus {
 // took nearly three times the instructions.
 // With AVX2, four vertices at a time (LanesRotation: glm's operations in its order, so the same
 // answers to the bit).
-[[gnu::noinline]] inline void place_tool_vertices(const ModelTool& tool, const Quat& q, const Vec3& p, Vec3* vertices) {
-    const size_t n = tool.mesh.vertices.size();
-    size_t i = 0;
+// Vertices [first, end) only where given (end clamped to the tool's).
+[[gnu::noinline]] inline void place_tool_vertices(const ModelTool& tool, const Quat& q, const Vec3& p, Vec3* vertices,
+                                                 size_t first = 0, size_t end = SIZE_MAX) {
+    const size_t n = std::min(end, tool.mesh.vertices.size());
+    size_t i = first;
 #if defined(__AVX2__)
     const LanesRotation rotation(q);
     const __m256d px = lanes_of(p.x), py = lanes_of(p.y), pz = lanes_of(p.z);
@@ -31,9 +33,11 @@ namespace sulcus {
 
 // Face planes of every piece in the world: n . x <= d inside the piece. With AVX2, four faces
 // at a time, to the bit as one at a time.
-inline void place_tool_planes(const ModelTool& tool, const Quat& q, const Vec3& p, Vec3* normals, double* offsets) {
-    const size_t n = tool.face_normals.size();
-    size_t f = 0;
+// Faces [first, end) only where given (end clamped to the tool's).
+inline void place_tool_planes(const ModelTool& tool, const Quat& q, const Vec3& p, Vec3* normals, double* offsets,
+                              size_t first = 0, size_t end = SIZE_MAX) {
+    const size_t n = std::min(end, tool.face_normals.size());
+    size_t f = first;
 #if defined(__AVX2__)
     const LanesRotation rotation(q);
     const __m256d px = lanes_of(p.x), py = lanes_of(p.y), pz = lanes_of(p.z);
@@ -58,6 +62,17 @@ inline void place_tool_capsule(const ModelTool& tool, const Quat& q, const Vec3&
     for (size_t k = 0; k < tool.pieces.size(); ++k)
         for (size_t j = 0; j <= size_t(kToolCapsules); ++j)
             points[k * (kToolCapsules + 1) + j] = q * tool.pieces[k].capsule_points[j] + p;
+}
+
+// Piece k alone placed as the three above place the whole tool (the same values to the bit, in the
+// whole tool's arrays): where only some pieces are needed at a pose.
+inline void place_tool_piece(const ModelTool& tool, size_t k, const Quat& q, const Vec3& p, Vec3* vertices,
+                             Vec3* normals, double* offsets, Vec3* capsule) {
+    const ToolPiece& piece = tool.pieces[k];
+    place_tool_vertices(tool, q, p, vertices, piece.vertex_begin, size_t(piece.vertex_begin) + piece.vertex_count);
+    place_tool_planes(tool, q, p, normals, offsets, piece.face_begin, size_t(piece.face_begin) + piece.face_count);
+    for (size_t j = 0; j <= size_t(kToolCapsules); ++j)
+        capsule[k * (kToolCapsules + 1) + j] = q * piece.capsule_points[j] + p;
 }
 
 // The view of piece `k`. `vertices`, `normals`, `offsets` and `capsule` are the whole tool's
