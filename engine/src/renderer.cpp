@@ -34,6 +34,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 
@@ -420,8 +421,8 @@ ConvexView tool_view(const Model& model, size_t piece, const Vec3* world_vertice
 }
 
 void set_tool_planes(const Model& model, const Quat& q, const Vec3& p, Workspace& w) {
-    // Already there (to the bit) for this model: the last tick placed them at its graphic pose,
-    // which is this tick's start.
+    // Already there (to the bit) for this model: mostly where a tick in contact placed them at its
+    // graphic pose (for the contact regions), which is the next tick's start.
     if (model.serial != 0 && w.planes_model == model.serial && std::memcmp(&w.planes_q, &q, sizeof(Quat)) == 0 &&
         std::memcmp(&w.planes_p, &p, sizeof(Vec3)) == 0)
         return;
@@ -731,8 +732,9 @@ double compliant_room_left(const Workspace::CompliantSet& c) {
 // is under kCompliantRefresh of Workspace::kCompliantRoom, gathered anew about its last query box.
 // The tool's pieces move together, and their sets left their boxes at the same tick (five walks
 // of the tissue's hierarchy and some thousand triangles measured in one tick); one a tick, ahead
-// of need, spreads them. Nothing else changes: a set whose box holds the query gives that query's
-// triangles in the same order, and those it has not measured are measured at the query.
+// of need, spreads them. What a query gets does not change: a set whose box holds it gives a fresh
+// query's triangles in the same order, and measures those it has no bound for. Only the lower
+// bounds they carry were measured at other times, and every use takes them as bounds.
 constexpr double kCompliantRefresh = 0.5;
 void tend_compliant_sets(const Model& model, Workspace& w) {
     Workspace::CompliantSet* most = nullptr;
@@ -2450,8 +2452,9 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         }
 
         // Guard: every triangle in reach must be separated from the tool at the new pose (a
-        // compliant one: by no more than its zone gives way). Planes at the new pose for the
-        // check, then restored to the start pose.
+        // compliant one: by no more than its zone gives way). The pieces at the new pose are
+        // placed in arrays of their own (Workspace::tool_moved, moved_face_n, ...); the start
+        // pose's stay in place.
         int missed = 0;
         int missed_tris[kMaxMissed];  // indices into w.near
         // No point of a piece moved further than this from the step's start: a triangle that was

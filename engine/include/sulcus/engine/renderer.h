@@ -396,9 +396,9 @@ struct StepStats {
     // (triangle, tool piece) pairs put through a primitive test this tick: gather's feature
     // search, the solve's guard and the free-motion CCD.
     int triangles_tested = 0;
-    // Sets of a compliant object's triangles near a piece gathered anew from the hierarchy this
-    // tick (with the near cache): where a piece left its set's box, or one set ahead of need at
-    // the tick's end.
+    // Sets of a compliant object's triangles near a piece gathered from the hierarchy this tick
+    // (with the near cache): a piece's first, one where a piece left its set's box, or one set
+    // ahead of need at the tick's end.
     int compliant_gathers = 0;
     int atoms_gathered = 0;     // constraint atoms found within reach (gather)
     int candidates = 0;         // candidate principal-contact sets solved (gather/solve)
