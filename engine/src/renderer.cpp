@@ -207,11 +207,11 @@ struct Workspace {
     Vec3 face_n[kMaxToolFaces];
     double face_d[kMaxToolFaces];
     double face_s[kMaxToolFaces];  // gather: an object vertex's height over each face of a piece (m)
-    Quat face_q{1.0, 0.0, 0.0, 0.0};  // the rotation face_n was placed with
-    // The pose face_n, face_d and capsule were placed at, for a model (Model::serial; 0: none).
+    // The pose face_n, face_d and capsule were placed at (rotation, position), for a model
+    // (Model::serial; 0: none).
+    Quat face_q{1.0, 0.0, 0.0, 0.0};
+    Vec3 face_p{0.0};
     uint64_t planes_model = 0;
-    Quat planes_q{1.0, 0.0, 0.0, 0.0};
-    Vec3 planes_p{0.0};
     Vec3 capsule[kMaxToolPieces * (kToolCapsules + 1)];  // the pieces' bounding capsules at that pose
     // The same at the pose a solve moves the tool to (the guard's check there).
     Vec3 moved_face_n[kMaxToolFaces];
@@ -423,15 +423,14 @@ ConvexView tool_view(const Model& model, size_t piece, const Vec3* world_vertice
 void set_tool_planes(const Model& model, const Quat& q, const Vec3& p, Workspace& w) {
     // Already there (to the bit) for this model: mostly where a tick in contact placed them at its
     // graphic pose (for the contact regions), which is the next tick's start.
-    if (model.serial != 0 && w.planes_model == model.serial && std::memcmp(&w.planes_q, &q, sizeof(Quat)) == 0 &&
-        std::memcmp(&w.planes_p, &p, sizeof(Vec3)) == 0)
+    if (model.serial != 0 && w.planes_model == model.serial && std::memcmp(&w.face_q, &q, sizeof(Quat)) == 0 &&
+        std::memcmp(&w.face_p, &p, sizeof(Vec3)) == 0)
         return;
     place_tool_planes(model.tool, q, p, w.face_n, w.face_d);
     place_tool_capsule(model.tool, q, p, w.capsule);
     w.face_q = q;
+    w.face_p = p;
     w.planes_model = model.serial;
-    w.planes_q = q;
-    w.planes_p = p;
 }
 
 double box_reach(const RendererSettings& S, double tool_radius, const double lower[6], const double upper[6]);
@@ -748,11 +747,11 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
         }
     }
     if (!most) return;
-    const Workspace::CompliantSet& c = *most;
+    Workspace::CompliantSet& c = *most;
     ++w.compliant_gathers;
-    if (!gather_compliant_set(model.objects[c.object], Aabb(c.query), *most)) {
-        most->model = 0;
-        most->used = 0;
+    if (!gather_compliant_set(model.objects[c.object], Aabb(c.query), c)) {
+        c.model = 0;
+        c.used = 0;
     }
 }
 

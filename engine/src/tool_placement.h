@@ -56,12 +56,16 @@ inline void place_tool_planes(const ModelTool& tool, const Quat& q, const Vec3& 
     }
 }
 
+// Piece k's capsule axis points in the world, at points[k * (kToolCapsules + 1)] on.
+inline void place_piece_capsule(const ModelTool& tool, size_t k, const Quat& q, const Vec3& p, Vec3* points) {
+    for (size_t j = 0; j <= size_t(kToolCapsules); ++j)
+        points[k * (kToolCapsules + 1) + j] = q * tool.pieces[k].capsule_points[j] + p;
+}
+
 // The capsules' axis points of every piece in the world: kToolCapsules + 1 per piece, piece k's
 // starting at points[k * (kToolCapsules + 1)].
 inline void place_tool_capsule(const ModelTool& tool, const Quat& q, const Vec3& p, Vec3* points) {
-    for (size_t k = 0; k < tool.pieces.size(); ++k)
-        for (size_t j = 0; j <= size_t(kToolCapsules); ++j)
-            points[k * (kToolCapsules + 1) + j] = q * tool.pieces[k].capsule_points[j] + p;
+    for (size_t k = 0; k < tool.pieces.size(); ++k) place_piece_capsule(tool, k, q, p, points);
 }
 
 // Piece k alone placed as the three above place the whole tool (the same values to the bit, in the
@@ -71,8 +75,7 @@ inline void place_tool_piece(const ModelTool& tool, size_t k, const Quat& q, con
     const ToolPiece& piece = tool.pieces[k];
     place_tool_vertices(tool, q, p, vertices, piece.vertex_begin, size_t(piece.vertex_begin) + piece.vertex_count);
     place_tool_planes(tool, q, p, normals, offsets, piece.face_begin, size_t(piece.face_begin) + piece.face_count);
-    for (size_t j = 0; j <= size_t(kToolCapsules); ++j)
-        capsule[k * (kToolCapsules + 1) + j] = q * piece.capsule_points[j] + p;
+    place_piece_capsule(tool, k, q, p, capsule);
 }
 
 // The view of piece `k`. `vertices`, `normals`, `offsets` and `capsule` are the whole tool's
