@@ -32,6 +32,9 @@ struct NearTriangle {
     // a distance search between them starts.
     Vec3 direction{0.0};
     GjkSimplex simplex{};  // where a GJK search between them ended (count 0 when unknown)
+    // Where the step keeps what it knows of the pair between ticks (0: nowhere); the renderer's
+    // own index.
+    uint16_t memo = 0;
 };
 
 struct CcdResult {

@@ -101,6 +101,9 @@ constexpr int kMaxNear = 8192;
 // How far a compliant set's capsules may move before a triangle they reached into is measured
 // again (m; gather_in_box).
 constexpr double kRemeasureMotion = 3e-5;
+// How far past the tests' bounds gather_atoms looks for a piece's vertices when it measures how
+// long a triangle stays clear of them (m; Workspace::CompliantSet::quiet).
+constexpr double kQuietHorizon = 5e-5;
 constexpr int kMaxAtoms = 1024;
 // Triangles the guard finds the atoms let the tool into, taken in one round: all of them as a
 // rule (deep in the tissue some sixty at once), so that the candidate is solved again once.
@@ -233,6 +236,8 @@ struct Workspace {
     PieceReach prior_reach[kMaxToolPieces];
     int tests = 0;  // triangle tests of this tick (StepStats::triangles_tested)
     int compliant_gathers = 0;  // StepStats::compliant_gathers
+    int quiet_triangles = 0;    // StepStats::quiet_triangles
+    int quiet_featured = 0;     // StepStats::quiet_featured
     int detect_tests = 0;  // detect's distance tests of this tick (judge_near)
     FeatureKey feats[kMaxFeatures];
     int feat_count = 0;
@@ -350,9 +355,26 @@ struct Workspace {
     // they were at the last one): no capsule is nearer a triangle now than its bound then less
     // what `moved` has grown by since. A triangle that this puts beyond what gather looks at is
     // not measured again (gather_in_box).
+    //
+    // Each slot also keeps how long its triangle stays clear of gather_atoms' tests of the piece's
+    // vertices (none in the band of its plane nor within `far` of it): `quiet`, in terms of the
+    // set's `drift`, which adds up at each gather how far the piece's vertices may have moved
+    // since the last (motion_bound) and how much the tests' bounds have widened (twice the rise
+    // of the reach, once the rise of the tool's depth in the object). While `drift` is below
+    // `quiet` no vertex can have come into the tests' bounds, and the triangle gives no V-F
+    // feature without being looked at. NearTriangle::memo names the set and slot of a triangle
+    // a set gave (kMemoSlotBits).
     static constexpr int kCompliantSets = 8;
     static constexpr int kCompliantSetSlots = 4096;
     static constexpr double kCompliantRoom = 1e-4;
+    static constexpr int kMemoSlotBits = 12;
+    static_assert(kCompliantSetSlots == 1 << kMemoSlotBits && kCompliantSets < (1 << (16 - kMemoSlotBits)),
+                  "a set's slot and the set's index plus one fit NearTriangle::memo");
+    // `quiet` of a triangle whose vertices' clearance is not known (looked at with a margin the
+    // next time), and of one that gave a feature the last time (looked at without one).
+    static constexpr double kQuietUnknown = -1e300;
+    static constexpr double kQuietNone = -std::numeric_limits<double>::infinity();
+    uint64_t gather_calls = 0;
     struct CompliantSet {
         uint64_t model = 0;  // 0: empty
         uint16_t object = 0;
@@ -363,9 +385,16 @@ struct Workspace {
         uint32_t slots[kCompliantSetSlots];
         double kept[kCompliantSetSlots];  // bound + moved when measured (m); -1e300: not measured
         double measured_at[kCompliantSetSlots];  // `moved` when measured (m)
+        double quiet[kCompliantSetSlots];  // m, in terms of `drift`; or kQuietUnknown, kQuietNone
         Vec3 axis[kToolCapsules + 1];     // the capsule points at the last query (world)
         double moved = 0.0;               // m
         Aabb query;                       // the last query's box
+        double drift = 0.0;               // m
+        bool drift_known = false;         // whether the fields below are the last gather's
+        uint64_t drift_call = 0;          // the gather_atoms call that last added to `drift`
+        Pose drift_pose;                  // the tool's base pose at that call
+        double drift_reach = 0.0;         // its reach (m)
+        double drift_depth = 0.0;         // the tool's depth in the object then (SoftDepths, m)
     };
     CompliantSet compliant_sets[kCompliantSets];
     uint64_t compliant_clock = 0;
@@ -715,6 +744,7 @@ bool gather_compliant_set(const ModelObject& obj, const Aabb& b, Workspace::Comp
     return obj.bvh.query_slots(c.box, [&](uint32_t slot) {
         if (c.count == Workspace::kCompliantSetSlots) return false;
         c.kept[c.count] = -1e300;
+        c.quiet[c.count] = Workspace::kQuietUnknown;
         c.slots[c.count++] = slot;
         return true;
     });
@@ -794,6 +824,7 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
         nt.upper_m = 1e300;
         nt.direction = Vec3(0.0);
         nt.simplex = GjkSimplex{};
+        nt.memo = 0;
         return !any_only;
     };
     auto visit = [&](uint32_t tri) { return push(tri, bound_of(tri)); };
@@ -816,6 +847,7 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
                 if (c.used < set->used) set = &c;
         }
         Workspace::CompliantSet& c = *set;
+        if (c.model != model.serial || c.object != ok || c.piece != pk) c.drift_known = false;
         c.model = model.serial;
         c.object = ok;
         c.piece = pk;
@@ -832,6 +864,8 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
     Workspace::CompliantSet& c = *set;
     c.used = ++w.compliant_clock;
     c.query = b;
+    // The set's index plus one above the slot (NearTriangle::memo).
+    const uint16_t memo_set = uint16_t((set - w.compliant_sets + 1) << Workspace::kMemoSlotBits);
     // How far the capsules' points have moved since the last query: no point of a capsule moves
     // further than its ends (a rigid motion moves the points of a segment by the blend of its
     // ends' motions).
@@ -905,6 +939,7 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
             wait_near[waiting] = w.near_count;
             wait_slot[waiting++] = i;
             const bool more = push(tri, 0.0);
+            if (more || !overflow) w.near[w.near_count - 1].memo = uint16_t(memo_set | i);
             if (waiting == 4 || !more) measure();
             if (!more) break;
             continue;
@@ -914,7 +949,11 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
             bound = bound_of(tri);
             remember(i, bound);
         }
-        if (!push(tri, bound)) break;
+        if (!push(tri, bound)) {
+            if (!overflow) w.near[w.near_count - 1].memo = uint16_t(memo_set | i);
+            break;
+        }
+        w.near[w.near_count - 1].memo = uint16_t(memo_set | i);
     }
 #if defined(__AVX2__)
     measure();
@@ -1575,6 +1614,29 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
     };
     auto back_of = [&](uint16_t o) { return kBackFace + in_of(o); };
     auto reach_of = [&](uint16_t o) { return reach + in_of(o); };
+    // A compliant set's drift (Workspace::CompliantSet), added to once in this call: the motion
+    // of the piece's vertices since the set's last gather, and the rise of the tests' bounds
+    // (`far` by twice the reach's rise and once the depth's, `reach` and `back` by less).
+    const uint64_t call = ++w.gather_calls;
+    auto add_drift = [&](Workspace::CompliantSet& c, uint16_t o) {
+        if (c.drift_call == call) return;
+        c.drift_call = call;
+        const double depth = inside_reach(model, soft, o, 0.0);
+        if (c.drift_known)
+            c.drift += motion_bound(tool.pieces[c.piece], c.drift_pose, base) +
+                       2.0 * std::max(0.0, reach - c.drift_reach) + std::max(0.0, depth - c.drift_depth);
+        c.drift_known = true;
+        c.drift_pose = base;
+        c.drift_reach = reach;
+        c.drift_depth = depth;
+    };
+    // A triangle's `quiet` from what a look at it found: its clearance `clear` (m) added to the
+    // set's drift, a picometre under for the rounding of the sums; none where a vertex came
+    // within the bounds, unknown where it was not measured.
+    auto quiet_until = [](const Workspace::CompliantSet& c, double clear, bool featured) {
+        if (featured) return Workspace::kQuietNone;
+        return clear > 1e-12 ? c.drift + clear - 1e-12 : Workspace::kQuietUnknown;
+    };
     // Whether a constraint normal points within 60 degrees of the push (true without a push).
     const double push_len = glm::length(push);
     auto along_push = [&](const Vec3& n) { return !(push_len > 0.0) || glm::dot(n, push) >= 0.5 * push_len; };
@@ -1630,6 +1692,31 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                 if (corners >> (3 + k) & 1u)
                     w.oedges[w.oedge_count++] = obj_feature(nt.object, obj.topology.triangle_edges[nt.tri][k], nt.piece);
         if (beyond) continue;
+        // A triangle a compliant set gave, clear of the piece's vertices while the set's drift is
+        // under its `quiet` (Workspace::CompliantSet): passed over. Else, unless it gave a feature
+        // the last time, its clearance is measured: how far the nearest vertex is from the tests'
+        // bounds, up to kQuietHorizon (the vertices are looked for that much further).
+        // (With RendererSettings::audit_quiet_triangles a quiet one is looked at all the same,
+        // to count it where a vertex came within the bounds; nothing found is kept.)
+        Workspace::CompliantSet* set = nullptr;
+        int slot = 0;
+        bool measure = false, auditing = false;
+        if (nt.memo != 0) {
+            set = &w.compliant_sets[(nt.memo >> Workspace::kMemoSlotBits) - 1];
+            slot = nt.memo & (Workspace::kCompliantSetSlots - 1);
+            add_drift(*set, nt.object);
+            const double quiet = set->quiet[slot];
+            if (quiet > set->drift) {
+                ++w.quiet_triangles;
+                if (!model.settings.audit_quiet_triangles) continue;
+                auditing = true;
+                set = nullptr;
+            }
+            measure = !auditing && quiet != Workspace::kQuietNone;
+        }
+        const double horizon = measure ? kQuietHorizon : 0.0;
+        double clear = horizon;  // the least clearance of a vertex looked at (measure only)
+        bool featured = false;   // whether a vertex came within the tests' bounds
         // No point further than `far` from the triangle's bounding sphere is within `far` of it.
         const TriangleSphere& ts = obj.topology.triangle_spheres[nt.tri];
         const double sphere = ts.radius + far;
@@ -1637,13 +1724,13 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         const double* coords = tool.axial_coords.data() + piece.vertex_begin;
         const uint32_t* order = tool.axial_vertices.data() + piece.vertex_begin;
         const int run_end = int(piece.vertex_count);
-        const double run_bottom = along - sphere - axial_slack;
-        const double run_top = along + sphere + axial_slack;
+        const double run_bottom = along - sphere - horizon - axial_slack;
+        const double run_top = along + sphere + horizon + axial_slack;
         // The run's vertices the ball's shadow across the axis may hold, in the run's order: by
         // the slabs for a ball narrow against the piece (ToolPiece::cross_narrow_m), else the
         // whole run. The slabs along the axis the run meets hold every vertex of the run (and a
         // few past its ends, which the loop passes over).
-        const double shadow = sphere + axial_slack;
+        const double shadow = sphere + horizon + axial_slack;
         const bool by_mask = shadow < piece.cross_narrow_m;
         uint64_t candidates = 0;
         int run_lo = 0;
@@ -1662,7 +1749,10 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         } else {
             // Most runs hold no vertex (the ball is beside the piece's long faces): their slabs
             // say so.
-            if (piece.axial_run_empty(run_bottom, run_top)) continue;
+            if (piece.axial_run_empty(run_bottom, run_top)) {
+                if (set) set->quiet[slot] = quiet_until(*set, clear, featured);
+                continue;
+            }
             run_lo = piece.axial_run_start(coords, run_bottom);
         }
         for (int r = run_lo; by_mask ? candidates != 0 : r < run_end && coords[r] <= run_top; ++r) {
@@ -1674,11 +1764,28 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             }
             const int a = int(order[r]);
             const double plane = glm::dot(n, w.tool_world[a] - p0);
-            if (plane > reach || plane < -back) continue;
+            // A vertex out of the plane's band is clear of it by as much, or more.
+            if (plane > reach || plane < -back) {
+                clear = std::min(clear, std::max(plane - reach, -back - plane));
+                continue;
+            }
             const Vec3 off = w.tool_world[a] - ts.centre;
-            if (glm::dot(off, off) > sphere * sphere) continue;
+            const double off2 = glm::dot(off, off);
+            if (off2 > sphere * sphere) {
+                if (measure && off2 < (sphere + clear) * (sphere + clear))
+                    clear = std::min(clear, std::sqrt(off2) - sphere);
+                continue;
+            }
             TriClosest c;
-            if (!closest_on_triangle_within(w.tool_world[a], p0, p1, p2, far, c)) continue;
+            if (!closest_on_triangle_within(w.tool_world[a], p0, p1, p2, far, c)) {
+                if (measure) clear = std::min(clear, glm::length(w.tool_world[a] - c.point) - far);
+                continue;
+            }
+            featured = true;
+            if (auditing) {
+                ++w.quiet_featured;
+                break;
+            }
             const FeatureKey key = feature_key(obj, nt.object, nt.tri, uint32_t(a), c.region);
             if (obj.compliant) {
                 // An edge or vertex feature of a compliant object is used only by a vertex outside
@@ -1698,6 +1805,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                 w.gather_full = true;
             }
         }
+        if (set) set->quiet[slot] = quiet_until(*set, clear, featured);
     }
     std::sort(w.feats, w.feats + w.feat_count);
     w.feat_count = static_cast<int>(std::unique(w.feats, w.feats + w.feat_count) - w.feats);
@@ -3251,6 +3359,8 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     w.tests = 0;
     w.detect_tests = 0;
     w.compliant_gathers = 0;
+    w.quiet_triangles = 0;
+    w.quiet_featured = 0;
 
     // Input health: a non-finite or non-unit pose is refused; the last pose is kept.
     const double qn = glm::length(haptic_in.orientation);
@@ -3595,6 +3705,8 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     res.stats.times.force_us = micros(t_force, t_end);
     res.stats.triangles_tested = w.tests;
     res.stats.compliant_gathers = w.compliant_gathers;
+    res.stats.quiet_triangles = w.quiet_triangles;
+    res.stats.quiet_featured = w.quiet_featured;
     return res;
 }
 

@@ -66,6 +66,10 @@ struct RendererSettings {
     // near each object edge for the ticks after. Changes the step's cost, not its results (off:
     // every tick and pass measures from scratch).
     bool near_cache = true;
+    // With the near cache, gather still looks at each triangle it passes over as quiet
+    // (StepStats::quiet_triangles) and counts those a vertex had in fact come within the bounds of
+    // (StepStats::quiet_featured), using nothing it finds: a check of the cache, at a cost.
+    bool audit_quiet_triangles = false;
     // Leave out a candidate that swaps an atom holding nothing in the default set's answer for
     // its alternative (that answer the first QP from the step's start): it cannot have less
     // energy (docs/renderer.md, solve). Off: every candidate is solved. Changes the step's cost,
@@ -400,6 +404,12 @@ struct StepStats {
     // (with the near cache): a piece's first, one where a piece left its set's box, or one set
     // ahead of need at the tick's end.
     int compliant_gathers = 0;
+    // Triangles of such sets whose vertex search gather passed over this tick: no vertex of the
+    // piece can have come within its bounds since the triangle was last looked at.
+    int quiet_triangles = 0;
+    // Of those, the ones a vertex had come within the bounds of (with audit_quiet_triangles; 0
+    // when the cache holds what it should).
+    int quiet_featured = 0;
     int atoms_gathered = 0;     // constraint atoms found within reach (gather)
     int candidates = 0;         // candidate principal-contact sets solved (gather/solve)
     int atoms = 0;              // constraint atoms in the chosen candidate
