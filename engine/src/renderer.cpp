@@ -331,14 +331,14 @@ struct Workspace {
     struct EdgeHitMemo {
         uint64_t key = 0;
         uint64_t model = 0;
-        uint64_t used = 0;  // edge_memo_clock at the last use
+        uint64_t used = 0;  // gather_clock at the last use
         Aabb box;
         int count = 0;
         uint16_t hits[kEdgeMemoHits];
     };
     static constexpr int kEdgeMemoBits = 12;
     EdgeHitMemo edge_memo[1 << kEdgeMemoBits];
-    uint64_t edge_memo_clock = 0;  // counts gather_atoms' calls
+    uint64_t gather_clock = 0;  // counts gather_atoms' calls
     // The most room a memo's box is widened by (m): in the tissue, where an edge's reach is the
     // tool's depth in it, a box widened by all of that holds more hits than a memo keeps.
     static constexpr double kEdgeMemoRoom = 1e-4;
@@ -374,7 +374,6 @@ struct Workspace {
     // next time), and of one that gave a feature the last time (looked at without one).
     static constexpr double kQuietUnknown = -1e300;
     static constexpr double kQuietNone = -std::numeric_limits<double>::infinity();
-    uint64_t gather_calls = 0;
     struct CompliantSet {
         uint64_t model = 0;  // 0: empty
         uint16_t object = 0;
@@ -390,8 +389,8 @@ struct Workspace {
         double moved = 0.0;               // m
         Aabb query;                       // the last query's box
         double drift = 0.0;               // m
-        bool drift_known = false;         // whether the fields below are the last gather's
-        uint64_t drift_call = 0;          // the gather_atoms call that last added to `drift`
+        // The gather_atoms call (Workspace::gather_clock) the fields below are of; 0: none.
+        uint64_t drift_call = 0;
         Pose drift_pose;                  // the tool's base pose at that call
         double drift_reach = 0.0;         // its reach (m)
         double drift_depth = 0.0;         // the tool's depth in the object then (SoftDepths, m)
@@ -808,7 +807,7 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
                                            obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]])
                    : -1e300;
     };
-    auto push = [&](uint32_t tri, double bound) {
+    auto push = [&](uint32_t tri, double bound, uint16_t memo = 0) {
         if (w.near_count >= kMaxNear) {
             overflow = true;
             return false;
@@ -824,7 +823,7 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
         nt.upper_m = 1e300;
         nt.direction = Vec3(0.0);
         nt.simplex = GjkSimplex{};
-        nt.memo = 0;
+        nt.memo = memo;
         return !any_only;
     };
     auto visit = [&](uint32_t tri) { return push(tri, bound_of(tri)); };
@@ -847,7 +846,7 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
                 if (c.used < set->used) set = &c;
         }
         Workspace::CompliantSet& c = *set;
-        if (c.model != model.serial || c.object != ok || c.piece != pk) c.drift_known = false;
+        if (c.model != model.serial || c.object != ok || c.piece != pk) c.drift_call = 0;
         c.model = model.serial;
         c.object = ok;
         c.piece = pk;
@@ -939,8 +938,7 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
             wait_tri[waiting] = tri;
             wait_near[waiting] = w.near_count;
             wait_slot[waiting++] = i;
-            const bool more = push(tri, 0.0);
-            if (more || !overflow) w.near[w.near_count - 1].memo = uint16_t(memo_set | i);
+            const bool more = push(tri, 0.0, uint16_t(memo_set | i));
             if (waiting == 4 || !more) measure();
             if (!more) break;
             continue;
@@ -950,11 +948,7 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
             bound = bound_of(tri);
             remember(i, bound);
         }
-        if (!push(tri, bound)) {
-            if (!overflow) w.near[w.near_count - 1].memo = uint16_t(memo_set | i);
-            break;
-        }
-        w.near[w.near_count - 1].memo = uint16_t(memo_set | i);
+        if (!push(tri, bound, uint16_t(memo_set | i))) break;
     }
 #if defined(__AVX2__)
     measure();
@@ -1618,15 +1612,14 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
     // A compliant set's drift (Workspace::CompliantSet), added to once in this call: the motion
     // of the piece's vertices since the set's last gather, and the rise of the tests' bounds
     // (`far` by twice the reach's rise and once the depth's, `reach` and `back` by less).
-    const uint64_t call = ++w.gather_calls;
+    const uint64_t call = ++w.gather_clock;
     auto add_drift = [&](Workspace::CompliantSet& c, uint16_t o) {
         if (c.drift_call == call) return;
-        c.drift_call = call;
         const double depth = inside_reach(model, soft, o, 0.0);
-        if (c.drift_known)
+        if (c.drift_call != 0)
             c.drift += motion_bound(tool.pieces[c.piece], c.drift_pose, base) +
                        2.0 * std::max(0.0, reach - c.drift_reach) + std::max(0.0, depth - c.drift_depth);
-        c.drift_known = true;
+        c.drift_call = call;
         c.drift_pose = base;
         c.drift_reach = reach;
         c.drift_depth = depth;
@@ -1749,12 +1742,8 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             }
         } else {
             // Most runs hold no vertex (the ball is beside the piece's long faces): their slabs
-            // say so.
-            if (piece.axial_run_empty(run_bottom, run_top)) {
-                if (set) set->quiet[slot] = quiet_until(*set, clear, featured);
-                continue;
-            }
-            run_lo = piece.axial_run_start(coords, run_bottom);
+            // say so (an empty run: the loop looks at nothing).
+            run_lo = piece.axial_run_empty(run_bottom, run_top) ? run_end : piece.axial_run_start(coords, run_bottom);
         }
         for (int r = run_lo; by_mask ? candidates != 0 : r < run_end && coords[r] <= run_top; ++r) {
             if (by_mask) {
@@ -1975,7 +1964,6 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
 
     // Tool edges against convex object edges (E-E, Type 2) on the dynamic plane of eq. 7.
     w.oedge_count = sort_unique(w.oedges, w.feature_scratch, w.oedge_count, w.feature_table);
-    ++w.edge_memo_clock;
     // The last edge's object and zone, and their `covered` below.
     int covered_object = -1, covered_zone = -1;
     double covered = 0.0;
@@ -2011,7 +1999,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         Workspace::EdgeHitMemo* memo = !memo_on ? nullptr : owns(pair[0]) ? pair[0] : owns(pair[1]) ? pair[1] : nullptr;
         const uint16_t* edge_hits = w.edge_hits;
         if (memo && memo->box.contains(local)) {
-            memo->used = w.edge_memo_clock;
+            memo->used = w.gather_clock;
             edge_hits = memo->hits;
             hits = memo->count;
         } else {
@@ -2027,7 +2015,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                 if (!memo) memo = pair[0]->used <= pair[1]->used ? pair[0] : pair[1];
                 memo->key = memo_key;
                 memo->model = model.serial;
-                memo->used = w.edge_memo_clock;
+                memo->used = w.gather_clock;
                 memo->box = box;
                 memo->count = hits;
                 std::copy(w.edge_hits, w.edge_hits + hits, memo->hits);
