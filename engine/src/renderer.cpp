@@ -2572,10 +2572,13 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         };
         // A separation of at least `floor` at the start spares a triangle the check at the new
         // pose. A compliant triangle (which the tool is often inside) tries the witnesses
-        // (separation_witness) before GJK; a rigid one only where GJK finds them touching. Either
-        // way a bound that falls short is kept: the check at the new pose settles the triangle.
-        // A compliant triangle's separation at an earlier pose, less the motion since
-        // (SeparationMemo), comes first; what is found here is remembered.
+        // (separation_witness) and the tapered capsules, and no search: GJK here settled under
+        // half of the tissue triangles it was run on, and the check at the new pose settles the
+        // rest as cheaply (one the witnesses leave under the floor goes there to the
+        // separating-axis test at once). A rigid one tries GJK, and the witnesses where GJK finds
+        // them touching. Either way a bound that falls short is kept: the check at the new pose
+        // settles the triangle. A compliant triangle's separation at an earlier pose, less the
+        // motion since (SeparationMemo), comes first; what is found here is remembered.
         const bool memo = S.near_cache && near_cache_at(w.cache, model, base);
         // The pieces' capsule lines at the start, for the tapers' bound below.
         CapsuleLine lines[kMaxToolPieces];
@@ -2625,6 +2628,10 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
                     continue;
                 }
             }
+            if (compliant) {
+                nt.separation_m = std::max(witness, nt.lower_m);
+                continue;
+            }
             ++w.tests;
             // GJK's gap along its directions, until it reaches the floor (a bound as good as
             // the separation, cheaper) or the distance is found under it; the witnesses' bound
@@ -2634,9 +2641,7 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             const DistanceBounds d = convex_triangle_separation(view, t0, t1, t2, floor, floor, hint, warm);
             nt.separation_m = d.separation;
             if (d.separation < floor && !(d.upper < floor))
-                nt.separation_m =
-                    std::max(d.separation, compliant ? witness : separation_witness(model, view, nt, floor, w));
-            if (remember) near_cache_keep_separation(w.cache, nt.object, nt.tri, nt.piece, nt.separation_m);
+                nt.separation_m = std::max(d.separation, separation_witness(model, view, nt, floor, w));
         }
         // The tool's pieces at the new pose, each placed once a triangle needs it (mostly the tip
         // and its neighbour of the probe's eleven).
@@ -2681,6 +2686,13 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             if (glm::dot(dir, dir) > 0.0 &&
                 convex_triangle_separation(moved, t0, t1, t2, floor, -1e300, &dir, sx, 0).separation >= floor)
                 continue;
+            // A compliant triangle already under the floor at the start (by its lower bound) is
+            // mostly under it here too, which only the separating-axis test shows: that at once,
+            // without the search from the normal (its answer, exact, settles the triangle either way).
+            if (compliant && w.near[i].separation_m < floor) {
+                if (separation_test(model, moved, w.near[i], w) < floor) missed_tris[missed++] = i;
+                continue;
+            }
             if (convex_triangle_separation(moved, t0, t1, t2, floor, -1e300, &obj.topology.triangle_normals[w.near[i].tri],
                                            sx)
                     .separation >= floor)
