@@ -2615,21 +2615,21 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             const ModelObject& obj = model.objects[nt.object];
             const auto& t = obj.mesh.triangles[nt.tri];
             const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
-            // A compliant triangle clear of the floor by the tapered capsules needs no search:
-            // beside a tapering probe they bound it some tens of micrometres closer than the
-            // capsules did in detect.
-            const ToolPiece& piece = model.tool.pieces[nt.piece];
-            if (compliant && piece.capsule_count > 0 && floor > 0.0) {
+            if (compliant) {
+                // Clear of the floor by the tapered capsules (beside a tapering probe they bound
+                // it some tens of micrometres closer than the capsules did in detect), else left
+                // with the witnesses' bound.
+                const ToolPiece& piece = model.tool.pieces[nt.piece];
                 const double taper =
-                    piece_taper_bound(piece, lines[nt.piece], obj.topology.triangle_spheres[nt.tri], t0, t1, t2);
+                    piece.capsule_count > 0 && floor > 0.0
+                        ? piece_taper_bound(piece, lines[nt.piece], obj.topology.triangle_spheres[nt.tri], t0, t1, t2)
+                        : -1e300;
                 if (taper >= floor) {
                     nt.separation_m = std::max(taper, nt.lower_m);
                     if (remember) near_cache_keep_separation(w.cache, nt.object, nt.tri, nt.piece, nt.separation_m);
-                    continue;
+                } else {
+                    nt.separation_m = std::max(witness, nt.lower_m);
                 }
-            }
-            if (compliant) {
-                nt.separation_m = std::max(witness, nt.lower_m);
                 continue;
             }
             ++w.tests;

@@ -23,6 +23,11 @@ import tempfile
 TIMES = {'step_us', 'detect_us', 'gather_us', 'solve_us', 'select_us', 'force_us', 'least_step_us'}
 
 
+def other_answers(x, y):
+    """The columns (times and triangles tested left out) where tick rows x and y differ."""
+    return [k for k in x if k not in TIMES and k != 'triangles_tested' and x[k] != y.get(k)]
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('a')
@@ -58,7 +63,7 @@ def main():
             differ = max(len(ra), len(rb))
             first = ('tick count', len(ra), len(rb))
         for i, (x, y) in enumerate(zip(ra, rb)):
-            columns = [k for k in x if k not in TIMES and k != 'triangles_tested' and x[k] != y.get(k)]
+            columns = other_answers(x, y)
             if columns:
                 differ += 1
                 if first is None:
