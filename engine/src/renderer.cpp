@@ -316,6 +316,10 @@ struct Workspace {
     int gap_extremes[kMaxToolPieces][2] = {};
     // The face of each piece that last showed the guard a triangle vertex not deep inside it.
     int deep_rejecting[kMaxToolPieces] = {};
+    // The near triangles the guard checks at the new pose (indices into `near`, in order), and
+    // the give of each one's zone there: those the pass over the start leaves unsettled.
+    int guard_open[kMaxNear];
+    double guard_give[kMaxNear];
     // The tool edges (relative to their piece's first) whose boxes meet a box about an object
     // edge in the piece's frame, by a hash of the (object, edge, piece) feature plus one (key 0:
     // none), for a model (Model::serial): the box of the edge that gather queries lies inside it
@@ -2585,12 +2589,25 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         for (size_t k = 0; k < model.tool.pieces.size(); ++k)
             if (model.tool.pieces[k].capsule_count > 0)
                 lines[k] = capsule_line(model.tool.pieces[k], w.capsule + k * (kToolCapsules + 1));
+        // What this pass leaves unsettled goes on to the check at the new pose (w.guard_open): a
+        // triangle whose separation here, less the motion, is under the zone's give there.
+        int open = 0;
+        auto settle = [&](int i, double give) {
+            const NearTri& nt = w.near[i];
+            if (nt.separation_m - piece_moved_by[nt.piece] >= -(S.constraint_tol_m + give)) return;
+            w.guard_open[open] = i;
+            w.guard_give[open++] = give;
+        };
         for (int i = 0; i < w.near_count; ++i) {
             NearTri& nt = w.near[i];
             const double moved_by = piece_moved_by[nt.piece];
-            if (nt.lower_m > moved_by || !std::isnan(nt.separation_m)) continue;
+            if (nt.lower_m > moved_by) continue;
             const double give = triangle_zone_depth(model, w.slacks, nt);
             if (bound_settles(nt, moved_by, give)) continue;
+            if (!std::isnan(nt.separation_m)) {
+                settle(i, give);
+                continue;
+            }
             const double floor = moved_by - (S.constraint_tol_m + give);
             const bool compliant = model.objects[nt.object].compliant;
             const bool remember = compliant && memo;
@@ -2598,6 +2615,7 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
                 const double earlier = near_cache_separation(w.cache, model, nt.object, nt.tri, nt.piece);
                 if (earlier >= floor) {
                     nt.separation_m = std::max(earlier, nt.lower_m);
+                    settle(i, give);
                     continue;
                 }
             }
@@ -2606,12 +2624,16 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             if (witness >= floor) {
                 nt.separation_m = std::max(witness, nt.lower_m);
                 if (remember) near_cache_keep_separation(w.cache, nt.object, nt.tri, nt.piece, nt.separation_m);
+                settle(i, give);
                 continue;
             }
             // Detect's upper bound on the distance here under the floor (a triangle the tool
             // rests on): no bound here spares it the check at the new pose. Left unmeasured for a
             // candidate that moves the tool less.
-            if (nt.upper_m < floor) continue;
+            if (nt.upper_m < floor) {
+                settle(i, give);
+                continue;
+            }
             const ModelObject& obj = model.objects[nt.object];
             const auto& t = obj.mesh.triangles[nt.tri];
             const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
@@ -2630,6 +2652,7 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
                 } else {
                     nt.separation_m = std::max(witness, nt.lower_m);
                 }
+                settle(i, give);
                 continue;
             }
             ++w.tests;
@@ -2642,6 +2665,7 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             nt.separation_m = d.separation;
             if (d.separation < floor && !(d.upper < floor))
                 nt.separation_m = std::max(d.separation, separation_witness(model, view, nt, floor, w));
+            settle(i, give);
         }
         // The tool's pieces at the new pose, each placed once a triangle needs it (mostly the tip
         // and its neighbour of the probe's eleven).
@@ -2653,12 +2677,9 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             w.moved_face_q = nx.q;
             moved_placed |= 1u << k;
         };
-        for (int i = 0; i < w.near_count && missed < kMaxMissed; ++i) {
-            const double moved_by = piece_moved_by[w.near[i].piece];
-            if (w.near[i].lower_m > moved_by) continue;
-            const double give_i = triangle_zone_depth(model, w.slacks, w.near[i]);
-            if (bound_settles(w.near[i], moved_by, give_i)) continue;
-            if (w.near[i].separation_m - moved_by >= -(S.constraint_tol_m + give_i)) continue;
+        for (int j = 0; j < open && missed < kMaxMissed; ++j) {
+            const int i = w.guard_open[j];
+            const double give_i = w.guard_give[j];
             const size_t k = w.near[i].piece;
             place_moved(k);
             const ConvexView moved = tool_convex_view(model.tool, k, w.tool_moved, w.moved_face_n, w.moved_face_d,
