@@ -188,6 +188,48 @@ TEST(NearCache, TissueSetsAreGatheredAheadOneATick) {
     EXPECT_LE(most, 2);
 }
 
+// A session starts the step's caches afresh, the tissue sets and the edge and face memos as well
+// as the near cache (Workspace::owner): run again after itself on one thread, the session does the
+// same work at every tick (the same sets gathered anew, the same quiet triangles passed over, the
+// same edges and vertices missing from the memos, the same triangles tested), not only gives the
+// same answers. The bench's runs each start from such
+// a state, so its least time over runs compares like with like at every tick. (With the memos
+// kept from the session before, the second run found in them what the first had to search for.)
+TEST(NearCache, ASessionRunAgainDoesTheSameWork) {
+    const cli::BenchScene b = load("quadrant_two_regions");
+    ASSERT_GT(b.ticks.size(), size_t(2600));
+    const auto model = model_for(b, true);
+    struct Work {
+        int tested, gathers, quiet, near, edge_queries, face_searches;
+        bool operator==(const Work&) const = default;
+    };
+    auto session = [&] {
+        std::vector<Work> out;
+        State state = make_state(b.ticks.front());
+        for (size_t i = 0; i < 2600; ++i) {
+            const StepResult r = step(*model, state, b.ticks[i]);
+            out.push_back(Work{r.stats.triangles_tested, r.stats.compliant_gathers, r.stats.quiet_triangles,
+                               r.stats.triangles_near, r.stats.edge_queries, r.stats.face_searches});
+        }
+        return out;
+    };
+    const std::vector<Work> first = session(), second = session();
+    int gathers = 0, quiet = 0, edges = 0, faces = 0;
+    for (size_t i = 0; i < first.size(); ++i) {
+        ASSERT_EQ(first[i], second[i]) << "tick " << i;
+        gathers += first[i].gathers;
+        quiet += first[i].quiet;
+        edges += first[i].edge_queries;
+        faces += first[i].face_searches;
+    }
+    // The sets are gathered anew along the way, their quiet marks used, and the memos both filled
+    // and missed.
+    EXPECT_GT(gathers, 100);
+    EXPECT_GT(quiet, 100000);
+    EXPECT_GT(edges, 1000);
+    EXPECT_GT(faces, 1000);
+}
+
 // Most gingiva triangles near the probe are near its long faces, not its vertices: gather's search
 // of the piece's vertices finds none within its bounds, tick after tick. Each set's slot keeps how
 // long its triangle stays so (Workspace::CompliantSet::quiet), and gather passes over it until

@@ -237,6 +237,8 @@ struct Workspace {
     int tests = 0;  // triangle tests of this tick (StepStats::triangles_tested)
     int compliant_gathers = 0;  // StepStats::compliant_gathers
     int quiet_triangles = 0;    // StepStats::quiet_triangles
+    int edge_queries = 0;       // StepStats::edge_queries
+    int face_searches = 0;      // StepStats::face_searches
     int quiet_featured = 0;     // StepStats::quiet_featured
     int detect_tests = 0;  // detect's distance tests of this tick (judge_near)
     FeatureKey feats[kMaxFeatures];
@@ -322,10 +324,9 @@ struct Workspace {
     double guard_give[kMaxNear];
     // The tool edges (relative to their piece's first) whose boxes meet a box about an object
     // edge in the piece's frame, by a hash of the (object, edge, piece) feature plus one (key 0:
-    // none), for a model (Model::serial): the box of the edge that gather queries lies inside it
-    // while the tool moves less than the room it was widened by, and those hits then hold every
-    // one of its own query's. Kept along a session and across sessions, as they depend on the
-    // geometry only. A key sits in its hash slot or the one beside it (slot ^ 1): of a pair of
+    // none), for a session (Workspace::owner): the box of the edge that gather queries lies inside
+    // it while the tool moves less than the room it was widened by, and those hits then hold every
+    // one of its own query's. A key sits in its hash slot or the one beside it (slot ^ 1): of a pair of
     // edges in the tissue that share a slot, neither pushes the other out at every tick, as
     // they did in a table of one slot a key and a quarter the size. Up to 160 hits: a probe
     // deep in an inflamed floor looks a millimetre round each edge, whose box then holds more
@@ -334,7 +335,7 @@ struct Workspace {
     static constexpr int kEdgeMemoHits = 160;
     struct EdgeHitMemo {
         uint64_t key = 0;
-        uint64_t model = 0;
+        uint64_t owner = 0;  // Workspace::owner
         uint64_t used = 0;  // gather_clock at the last use
         Aabb box;
         int count = 0;
@@ -351,7 +352,7 @@ struct Workspace {
     // some tick widened by kCompliantRoom. While a later query box lies inside it, that query's
     // triangles are these slots filtered by their boxes, in the same order, without the walk
     // down the hierarchy. For (object, piece) of a model; kCompliantSets of them, the one used
-    // longest ago replaced.
+    // longest ago replaced. For a session (Workspace::owner).
     //
     // Each slot keeps the capsules' bound on its triangle (piece_compliant_bound) where it was
     // last measured, as that bound plus the set's `moved` then. `moved` adds up how far the
@@ -379,7 +380,7 @@ struct Workspace {
     static constexpr double kQuietUnknown = -1e300;
     static constexpr double kQuietNone = -std::numeric_limits<double>::infinity();
     struct CompliantSet {
-        uint64_t model = 0;  // 0: empty
+        uint64_t owner = 0;  // Workspace::owner; 0: empty
         uint16_t object = 0;
         uint8_t piece = 0;
         uint64_t used = 0;
@@ -405,11 +406,11 @@ struct Workspace {
     // tolerance of it, while it stays within `room` of where they were found (`at`, m, in the
     // piece's frame): those within twice the room and the tie tolerance of the most there; or
     // (count -1) the face that put it beyond the reach, faces[0]. By a hash of the (object,
-    // vertex, piece) feature plus one (key 0: none), for a model.
+    // vertex, piece) feature plus one (key 0: none), for a session (Workspace::owner).
     static constexpr int kFaceMemoFaces = 16;
     struct FaceMemo {
         uint64_t key = 0;
-        uint64_t model = 0;
+        uint64_t owner = 0;  // Workspace::owner
         Vec3 at{0.0};
         double room = 0.0;
         int count = 0;
@@ -417,6 +418,12 @@ struct Workspace {
     };
     static constexpr int kFaceMemoBits = 10;
     FaceMemo face_memo[1 << kFaceMemoBits];
+    // Whose the tissue sets and the edge and face memos are: the model's (Model::serial) and the
+    // session's (State::session), never 0 (an empty set's or memo's). A new session starts them
+    // afresh, as it does the near cache: what a step costs then does not depend on the sessions
+    // stepped before it (the bench's runs each from a fresh state). Sessions stepped in turns
+    // keep theirs apart.
+    uint64_t owner = 0;
 };
 
 Workspace& workspace() {
@@ -772,7 +779,7 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
     Workspace::CompliantSet* most = nullptr;
     double least = kCompliantRefresh * Workspace::kCompliantRoom;
     for (Workspace::CompliantSet& c : w.compliant_sets) {
-        if (c.model != model.serial || c.object >= model.objects.size()) continue;
+        if (c.owner != w.owner || c.object >= model.objects.size()) continue;
         const double left = compliant_room_left(c);
         if (left < least) {
             least = left;
@@ -783,7 +790,7 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
     Workspace::CompliantSet& c = *most;
     ++w.compliant_gathers;
     if (!gather_compliant_set(model.objects[c.object], Aabb(c.query), c)) {
-        c.model = 0;
+        c.owner = 0;
         c.used = 0;
     }
 }
@@ -836,27 +843,33 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
         return !overflow;
     }
     // The set kept for this object and piece, if its box holds this one; else gathered anew, in
-    // the same set or the one used longest ago, unless it would not fit.
+    // the same set or the one used longest ago (one of another session's counts as never used),
+    // unless it would not fit.
     Workspace::CompliantSet* set = nullptr;
     for (Workspace::CompliantSet& c : w.compliant_sets)
-        if (c.model == model.serial && c.object == ok && c.piece == pk) {
+        if (c.owner == w.owner && c.object == ok && c.piece == pk) {
             set = &c;
             break;
         }
     if (!set || !set->box.contains(b)) {
         if (!set) {
+            auto used = [&](const Workspace::CompliantSet& c) { return c.owner == w.owner ? c.used : 0; };
             set = &w.compliant_sets[0];
             for (Workspace::CompliantSet& c : w.compliant_sets)
-                if (c.used < set->used) set = &c;
+                if (used(c) < used(*set)) set = &c;
         }
         Workspace::CompliantSet& c = *set;
-        if (c.model != model.serial || c.object != ok || c.piece != pk) c.drift_call = 0;
-        c.model = model.serial;
+        // Another object's or piece's set starts its drift afresh.
+        if (c.owner != w.owner || c.object != ok || c.piece != pk) {
+            c.drift_call = 0;
+            c.drift = 0.0;
+        }
+        c.owner = w.owner;
         c.object = ok;
         c.piece = pk;
         ++w.compliant_gathers;
         if (!gather_compliant_set(obj, b, c)) {
-            c.model = 0;
+            c.owner = 0;
             c.used = 0;
             obj.bvh.query(b, visit);
             return !overflow;
@@ -1892,7 +1905,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             const Vec3 local = to_tool * (p - base.position);
             const Vec3 off = local - memo.at;
             const bool memo_on = model.settings.near_cache;
-            const bool known = memo_on && memo.key == memo_key && memo.model == model.serial;
+            const bool known = memo_on && memo.key == memo_key && memo.owner == w.owner;
             if (known && memo.count < 0) {
                 // Beyond the reach at the last look: mostly still, by the same face.
                 const int f = memo.faces[0];
@@ -1902,6 +1915,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                 }
             }
             const bool from_memo = known && memo.count >= 0 && glm::dot(off, off) <= memo.room * memo.room;
+            w.face_searches += !from_memo;
             const int listed = from_memo ? memo.count : f1 - f0;
             for (int j = 0; j < listed; ++j) {
                 const int f = from_memo ? int(memo.faces[j]) : f0 + j;
@@ -1916,7 +1930,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             if (best_s > reach) beyond[k] = best;
             if (memo_on && best_s > reach) {
                 memo.key = memo_key;
-                memo.model = model.serial;
+                memo.owner = w.owner;
                 memo.count = -1;
                 memo.faces[0] = uint16_t(best);
             } else if (memo_on && !from_memo && best >= 0) {
@@ -1929,7 +1943,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                         ++count;
                     }
                 memo.key = count <= Workspace::kFaceMemoFaces ? memo_key : 0;
-                memo.model = model.serial;
+                memo.owner = w.owner;
                 memo.at = local;
                 memo.room = room;
                 memo.count = count;
@@ -1999,7 +2013,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         // out tick after tick.
         const uint32_t slot = hash_slot(memo_key, Workspace::kEdgeMemoBits);
         Workspace::EdgeHitMemo* const pair[2] = {&w.edge_memo[slot], &w.edge_memo[slot ^ 1u]};
-        auto owns = [&](const Workspace::EdgeHitMemo* m) { return m->key == memo_key && m->model == model.serial; };
+        auto owns = [&](const Workspace::EdgeHitMemo* m) { return m->key == memo_key && m->owner == w.owner; };
         Workspace::EdgeHitMemo* memo = !memo_on ? nullptr : owns(pair[0]) ? pair[0] : owns(pair[1]) ? pair[1] : nullptr;
         const uint16_t* edge_hits = w.edge_hits;
         if (memo && memo->box.contains(local)) {
@@ -2007,6 +2021,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             edge_hits = memo->hits;
             hits = memo->count;
         } else {
+            ++w.edge_queries;
             Aabb box = local;
             if (memo_on) box.inflate(std::min(far, Workspace::kEdgeMemoRoom));
             piece.edge_bvh.query(box, [&](uint32_t e) {
@@ -2016,9 +2031,11 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             std::sort(w.edge_hits, w.edge_hits + hits);
             if (memo_on && hits <= Workspace::kEdgeMemoHits) {
                 // Its own slot again, else the one used longer ago.
-                if (!memo) memo = pair[0]->used <= pair[1]->used ? pair[0] : pair[1];
+                // (One of another session's counts as never used.)
+                auto used = [&](const Workspace::EdgeHitMemo* m) { return m->owner == w.owner ? m->used : 0; };
+                if (!memo) memo = used(pair[0]) <= used(pair[1]) ? pair[0] : pair[1];
                 memo->key = memo_key;
-                memo->model = model.serial;
+                memo->owner = w.owner;
                 memo->used = w.gather_clock;
                 memo->box = box;
                 memo->count = hits;
@@ -3382,6 +3399,8 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     w.detect_tests = 0;
     w.compliant_gathers = 0;
     w.quiet_triangles = 0;
+    w.edge_queries = 0;
+    w.face_searches = 0;
     w.quiet_featured = 0;
 
     // Input health: a non-finite or non-unit pose is refused; the last pose is kept.
@@ -3403,7 +3422,11 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
         !same_pose(cache.last_haptic, state.last_haptic)) {
         near_cache_reset(cache);
         for (Workspace::SatMemo& m : w.sat_memo) m.key = 0;
+        for (auto& e : w.gap_extremes) e[0] = e[1] = 0;
+        for (int& f : w.deep_rejecting) f = 0;
     }
+    w.owner = (uint64_t(model.serial) << 32) ^ state.session;
+    if (w.owner == 0) w.owner = ~uint64_t(0);
     // ---- detect ----
     const size_t nv = model.tool.mesh.vertices.size();
     if (nv > static_cast<size_t>(kMaxToolVertices) || model.tool.face_normals.size() > static_cast<size_t>(kMaxToolFaces) ||
@@ -3728,6 +3751,8 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     res.stats.triangles_tested = w.tests;
     res.stats.compliant_gathers = w.compliant_gathers;
     res.stats.quiet_triangles = w.quiet_triangles;
+    res.stats.edge_queries = w.edge_queries;
+    res.stats.face_searches = w.face_searches;
     res.stats.quiet_featured = w.quiet_featured;
     return res;
 }

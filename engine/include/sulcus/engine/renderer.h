@@ -410,6 +410,11 @@ struct StepStats {
     // Of those, the ones a vertex had come within the bounds of (with audit_quiet_triangles; 0
     // when the cache holds what it should).
     int quiet_featured = 0;
+    // Object edges whose nearby tool edges gather took from the piece's hierarchy this tick, not
+    // from the memo of an earlier tick's; object vertices whose most-facing tool face it searched
+    // for among all the piece's faces, not among those a memo kept.
+    int edge_queries = 0;
+    int face_searches = 0;
     int atoms_gathered = 0;     // constraint atoms found within reach (gather)
     int candidates = 0;         // candidate principal-contact sets solved (gather/solve)
     int atoms = 0;              // constraint atoms in the chosen candidate
