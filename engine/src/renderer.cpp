@@ -401,6 +401,9 @@ struct Workspace {
         double drift_depth = 0.0;         // the tool's depth in the object then (SoftDepths, m)
     };
     CompliantSet compliant_sets[kCompliantSets];
+    // A set's old slots and quiet marks while it is gathered anew (gather_compliant_set).
+    uint32_t carry_slots[kCompliantSetSlots];
+    double carry_quiet[kCompliantSetSlots];
     uint64_t compliant_clock = 0;
     // The faces of a piece that an object vertex could be most in front of, or within the tie
     // tolerance of it, while it stays within `room` of where they were found (`at`, m, in the
@@ -744,17 +747,31 @@ double inside_reach(const Model& model, const SoftDepths& soft, uint16_t o, doub
 }
 
 // Gathers compliant set `c` anew about query box `b`: the slots whose boxes meet `b` widened by
-// Workspace::kCompliantRoom, none measured yet. False when they do not fit.
-bool gather_compliant_set(const ModelObject& obj, const Aabb& b, Workspace::CompliantSet& c) {
+// Workspace::kCompliantRoom, none measured yet. With `carry` (the same set gathered again as the
+// tool moves on, its drift going on) a slot it already had keeps its quiet mark: the mark says how
+// far the set's drift may grow before a vertex can come within the triangle's tests, whichever
+// set holds it. Both lists come in increasing order (Bvh::query_slots): one pass over the old
+// (copied aside) finds the slots in both. (Its bounds are measured again: carried, they were
+// looser than the fresh ones and cost more downstream than measuring them.) False when they do
+// not fit.
+bool gather_compliant_set(const ModelObject& obj, const Aabb& b, bool carry, Workspace::CompliantSet& c,
+                          Workspace& w) {
+    const int old_count = carry ? c.count : 0;
+    if (old_count > 0) {
+        std::copy(c.slots, c.slots + old_count, w.carry_slots);
+        std::copy(c.quiet, c.quiet + old_count, w.carry_quiet);
+    }
     c.box = b;
     c.box.inflate(Workspace::kCompliantRoom);
     c.query = b;
     c.count = 0;
     c.moved = 0.0;
+    int j = 0;
     return obj.bvh.query_slots(c.box, [&](uint32_t slot) {
         if (c.count == Workspace::kCompliantSetSlots) return false;
+        while (j < old_count && w.carry_slots[j] < slot) ++j;
         c.kept[c.count] = -1e300;
-        c.quiet[c.count] = Workspace::kQuietUnknown;
+        c.quiet[c.count] = j < old_count && w.carry_slots[j] == slot ? w.carry_quiet[j] : Workspace::kQuietUnknown;
         c.slots[c.count++] = slot;
         return true;
     });
@@ -789,7 +806,7 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
     if (!most) return;
     Workspace::CompliantSet& c = *most;
     ++w.compliant_gathers;
-    if (!gather_compliant_set(model.objects[c.object], Aabb(c.query), c)) {
+    if (!gather_compliant_set(model.objects[c.object], Aabb(c.query), true, c, w)) {
         c.owner = 0;
         c.used = 0;
     }
@@ -859,8 +876,10 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
                 if (used(c) < used(*set)) set = &c;
         }
         Workspace::CompliantSet& c = *set;
-        // Another object's or piece's set starts its drift afresh.
-        if (c.owner != w.owner || c.object != ok || c.piece != pk) {
+        // Another object's or piece's set starts its drift afresh; the same set's goes on, with
+        // its quiet marks.
+        const bool same = c.owner == w.owner && c.object == ok && c.piece == pk;
+        if (!same) {
             c.drift_call = 0;
             c.drift = 0.0;
         }
@@ -868,7 +887,7 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
         c.object = ok;
         c.piece = pk;
         ++w.compliant_gathers;
-        if (!gather_compliant_set(obj, b, c)) {
+        if (!gather_compliant_set(obj, b, same, c, w)) {
             c.owner = 0;
             c.used = 0;
             obj.bvh.query(b, visit);
