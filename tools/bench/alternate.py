@@ -9,7 +9,7 @@ which the interruptions rarely reach in every run. Then, per build: the median, 
 max of those per-tick least times, their mean over the ticks FROM to TO (the session's lean phase
 by default), and each stage's mean there (a stage's time is the first run's of each round, the
 least over rounds). It also says whether every build gave every tick the same answers (every
-column but the times and the triangles tested, which a cache may change without changing what is
+column but the times and the work (same_answers.WORK), which a cache may change without changing what is
 found).
 
     tools/bench/alternate.py quadrant_two_regions base=/tmp/cli_base new=build/bin/sulcus-cli \\

@@ -5,7 +5,8 @@ A change meant to make the step faster should not change what it finds. This run
 `bench --runs 1 --check-every 0 --ticks DIR` with each build over the whole bench set and
 compares the tick files column by column, the times left out: status, pose, force, atoms,
 candidates, QP solves and iterations, passes and the rest, as printed (to the last bit). The
-triangles tested are compared apart: a cache may test other triangles and find the same.
+work columns are compared apart (triangles tested, tissue sets gathered, quiet triangles, the
+memos' misses): a cache may do other work and find the same.
 
     tools/bench/same_answers.py /tmp/cli_base build/bin/sulcus-cli [--cases build/cases] [--out DIR]
 
@@ -21,11 +22,17 @@ import sys
 import tempfile
 
 TIMES = {'step_us', 'detect_us', 'gather_us', 'solve_us', 'select_us', 'force_us', 'least_step_us'}
+WORK = {'triangles_tested', 'compliant_gathers', 'quiet_triangles', 'edge_queries', 'face_searches'}
 
 
 def other_answers(x, y):
-    """The columns (times and triangles tested left out) where tick rows x and y differ."""
-    return [k for k in x if k not in TIMES and k != 'triangles_tested' and x[k] != y.get(k)]
+    """The columns (times and work left out) where tick rows x and y differ."""
+    return [k for k in x if k not in TIMES and k not in WORK and x[k] != y.get(k)]
+
+
+def other_work(x, y):
+    """The work columns where tick rows x and y differ."""
+    return [k for k in WORK if x.get(k) != y.get(k)]
 
 
 def main():
@@ -58,7 +65,7 @@ def main():
             ra = list(csv.DictReader(f))
         with open(fb, newline='') as f:
             rb = list(csv.DictReader(f))
-        differ, tested, first = 0, 0, None
+        differ, tested, first = 0, 0, None  # tested: ticks with other work
         if len(ra) != len(rb):
             differ = max(len(ra), len(rb))
             first = ('tick count', len(ra), len(rb))
@@ -68,10 +75,10 @@ def main():
                 differ += 1
                 if first is None:
                     first = (i, columns[:6])
-            tested += x.get('triangles_tested') != y.get('triangles_tested')
+            tested += bool(other_work(x, y))
         name = os.path.basename(fa)[:-len('_ticks.csv')]
         print(f'{name}: {len(ra)} ticks, {differ} with other answers' + (f' (first: {first})' if first else '') +
-              f', {tested} with other triangles tested')
+              f', {tested} with other work (triangles tested, sets gathered, quiet triangles, memo misses)')
         total += differ
     print('the same answers at every tick' if total == 0 else f'{total} ticks with other answers')
     sys.exit(0 if total == 0 else 1)
