@@ -429,6 +429,13 @@ struct Workspace {
     uint64_t owner = 0;
 };
 
+// When a tissue set or an edge memo was last used, for replacing the one used longest ago: one
+// of another owner's (Workspace::owner) counts as never used.
+template <class Entry>
+uint64_t last_use(const Entry& e, uint64_t owner) {
+    return e.owner == owner ? e.used : 0;
+}
+
 Workspace& workspace() {
     thread_local std::unique_ptr<Workspace> ws = std::make_unique<Workspace>();
     return *ws;
@@ -870,10 +877,9 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
         }
     if (!set || !set->box.contains(b)) {
         if (!set) {
-            auto used = [&](const Workspace::CompliantSet& c) { return c.owner == w.owner ? c.used : 0; };
             set = &w.compliant_sets[0];
             for (Workspace::CompliantSet& c : w.compliant_sets)
-                if (used(c) < used(*set)) set = &c;
+                if (last_use(c, w.owner) < last_use(*set, w.owner)) set = &c;
         }
         Workspace::CompliantSet& c = *set;
         // Another object's or piece's set starts its drift afresh; the same set's goes on, with
@@ -2050,9 +2056,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             std::sort(w.edge_hits, w.edge_hits + hits);
             if (memo_on && hits <= Workspace::kEdgeMemoHits) {
                 // Its own slot again, else the one used longer ago.
-                // (One of another session's counts as never used.)
-                auto used = [&](const Workspace::EdgeHitMemo* m) { return m->owner == w.owner ? m->used : 0; };
-                if (!memo) memo = used(pair[0]) <= used(pair[1]) ? pair[0] : pair[1];
+                if (!memo) memo = last_use(*pair[0], w.owner) <= last_use(*pair[1], w.owner) ? pair[0] : pair[1];
                 memo->key = memo_key;
                 memo->owner = w.owner;
                 memo->used = w.gather_clock;
@@ -2625,25 +2629,10 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
         for (size_t k = 0; k < model.tool.pieces.size(); ++k)
             if (model.tool.pieces[k].capsule_count > 0)
                 lines[k] = capsule_line(model.tool.pieces[k], w.capsule + k * (kToolCapsules + 1));
-        // What this pass leaves unsettled goes on to the check at the new pose (w.guard_open): a
-        // triangle whose separation here, less the motion, is under the zone's give there.
-        int open = 0;
-        auto settle = [&](int i, double give) {
-            const NearTri& nt = w.near[i];
-            if (nt.separation_m - piece_moved_by[nt.piece] >= -(S.constraint_tol_m + give)) return;
-            w.guard_open[open] = i;
-            w.guard_give[open++] = give;
-        };
-        for (int i = 0; i < w.near_count; ++i) {
-            NearTri& nt = w.near[i];
-            const double moved_by = piece_moved_by[nt.piece];
-            if (nt.lower_m > moved_by) continue;
-            const double give = triangle_zone_depth(model, w.slacks, nt);
-            if (bound_settles(nt, moved_by, give)) continue;
-            if (!std::isnan(nt.separation_m)) {
-                settle(i, give);
-                continue;
-            }
+        // The separation at the start of a triangle not yet measured there, at least its lower
+        // bound where that is all the tests below find (left NaN where detect's upper bound is
+        // under the floor: the check at the new pose settles it).
+        auto separate_at_start = [&](NearTri& nt, double moved_by, double give) {
             const double floor = moved_by - (S.constraint_tol_m + give);
             const bool compliant = model.objects[nt.object].compliant;
             const bool remember = compliant && memo;
@@ -2651,8 +2640,7 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
                 const double earlier = near_cache_separation(w.cache, model, nt.object, nt.tri, nt.piece);
                 if (earlier >= floor) {
                     nt.separation_m = std::max(earlier, nt.lower_m);
-                    settle(i, give);
-                    continue;
+                    return;
                 }
             }
             const ConvexView view = tool_view(model, nt.piece, w.tool_world, w);
@@ -2660,16 +2648,12 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             if (witness >= floor) {
                 nt.separation_m = std::max(witness, nt.lower_m);
                 if (remember) near_cache_keep_separation(w.cache, nt.object, nt.tri, nt.piece, nt.separation_m);
-                settle(i, give);
-                continue;
+                return;
             }
             // Detect's upper bound on the distance here under the floor (a triangle the tool
             // rests on): no bound here spares it the check at the new pose. Left unmeasured for a
             // candidate that moves the tool less.
-            if (nt.upper_m < floor) {
-                settle(i, give);
-                continue;
-            }
+            if (nt.upper_m < floor) return;
             const ModelObject& obj = model.objects[nt.object];
             const auto& t = obj.mesh.triangles[nt.tri];
             const Vec3 &t0 = obj.mesh.vertices[t[0]], &t1 = obj.mesh.vertices[t[1]], &t2 = obj.mesh.vertices[t[2]];
@@ -2688,8 +2672,7 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
                 } else {
                     nt.separation_m = std::max(witness, nt.lower_m);
                 }
-                settle(i, give);
-                continue;
+                return;
             }
             ++w.tests;
             // GJK's gap along its directions, until it reaches the floor (a bound as good as
@@ -2701,7 +2684,22 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             nt.separation_m = d.separation;
             if (d.separation < floor && !(d.upper < floor))
                 nt.separation_m = std::max(d.separation, separation_witness(model, view, nt, floor, w));
-            settle(i, give);
+        };
+        // What this pass leaves unsettled goes on to the check at the new pose (w.guard_open), with
+        // its zone's give there: a triangle whose separation here, less the motion, is under that
+        // give (or unmeasured).
+        int open = 0;
+        for (int i = 0; i < w.near_count; ++i) {
+            NearTri& nt = w.near[i];
+            const double moved_by = piece_moved_by[nt.piece];
+            if (nt.lower_m > moved_by) continue;
+            const double give = triangle_zone_depth(model, w.slacks, nt);
+            if (bound_settles(nt, moved_by, give)) continue;
+            if (std::isnan(nt.separation_m)) separate_at_start(nt, moved_by, give);
+            if (!(nt.separation_m - moved_by >= -(S.constraint_tol_m + give))) {
+                w.guard_open[open] = i;
+                w.guard_give[open++] = give;
+            }
         }
         // The tool's pieces at the new pose, each placed once a triangle needs it (mostly the tip
         // and its neighbour of the probe's eleven).

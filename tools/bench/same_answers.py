@@ -65,7 +65,7 @@ def main():
             ra = list(csv.DictReader(f))
         with open(fb, newline='') as f:
             rb = list(csv.DictReader(f))
-        differ, tested, first = 0, 0, None  # tested: ticks with other work
+        differ, other_work_ticks, first = 0, 0, None
         if len(ra) != len(rb):
             differ = max(len(ra), len(rb))
             first = ('tick count', len(ra), len(rb))
@@ -75,10 +75,10 @@ def main():
                 differ += 1
                 if first is None:
                     first = (i, columns[:6])
-            tested += bool(other_work(x, y))
+            other_work_ticks += bool(other_work(x, y))
         name = os.path.basename(fa)[:-len('_ticks.csv')]
         print(f'{name}: {len(ra)} ticks, {differ} with other answers' + (f' (first: {first})' if first else '') +
-              f', {tested} with other work (triangles tested, sets gathered, quiet triangles, memo misses)')
+              f', {other_work_ticks} with other work (triangles tested, sets gathered, quiet triangles, memo misses)')
         total += differ
     print('the same answers at every tick' if total == 0 else f'{total} ticks with other answers')
     sys.exit(0 if total == 0 else 1)
