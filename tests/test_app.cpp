@@ -29,6 +29,8 @@ const std::string kApp;
 #endif
 const std::string kCli = std::string(SULCUS_BINARY_DIR) + "/bin/sulcus-cli";
 const std::string kCases = std::string(SULCUS_BINARY_DIR) + "/cases";
+// Runs the rest of the command line under an X server of its own; the screen follows.
+const std::string kXvfb = std::string(SULCUS_SOURCE_DIR) + "/tests/app/xvfb.sh ";
 
 std::string temp_dir(const std::string& name) {
     const fs::path d = fs::temp_directory_path() / ("sulcus_test_app_" + name);
@@ -83,7 +85,7 @@ TEST(App, ScreenshotShowsTheToothAndTheProbe) {
     const std::string dir = temp_dir("screenshot");
     const std::string shot = dir + "/shot.png", ids = dir + "/ids.png";
     // The quadrant from buccal of sextant 6, gingiva see-through, the probe where the case starts it.
-    const Shell r = run("xvfb-run -a -n 117 -s '-screen 0 1920x1080x24' " + kApp + " --case " + kCases +
+    const Shell r = run(kXvfb + "1920x1080x24 " + kApp + " --case " + kCases +
                       "/quadrant_44_47 --device mouse --frames 20 --size 1280x720 --gingiva 0.4 --sextant 6 "
                       "--screenshot " + shot + " --ids " + ids);
     ASSERT_EQ(r.status, 0) << r.output;
@@ -162,7 +164,7 @@ TEST(App, NoDisplayIsAClearError) {
 // With no Phantom answering, the default device is the mouse, and the app says why.
 TEST(App, AutoDeviceFallsBackToTheMouse) {
     REQUIRE_APP();
-    const Shell r = run("SULCUS_LIBHD=/nonexistent/libHD.so xvfb-run -a -n 124 -s '-screen 0 1280x800x24' " + kApp +
+    const Shell r = run("SULCUS_LIBHD=/nonexistent/libHD.so " + kXvfb + "1280x800x24 " + kApp +
                         " --case " + kCases + "/healthy_11 --frames 3 --size 800x600");
     ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("/nonexistent/libHD.so"), std::string::npos) << r.output;
@@ -175,7 +177,7 @@ TEST(App, AutoDeviceFallsBackToTheMouse) {
 TEST(App, SimulatedHandChartsEverySite) {
     REQUIRE_APP();
     const std::string dir = temp_dir("sim");
-    const Shell r = run("xvfb-run -a -n 131 -s '-screen 0 1280x800x24' " + kApp + " --case " + kCases +
+    const Shell r = run(kXvfb + "1280x800x24 " + kApp + " --case " + kCases +
                         "/healthy_11 --device sim --ticks 8600 --size 800x600 --report " + dir + "/report.json");
     ASSERT_EQ(r.status, 0) << r.output;
     std::ifstream in(dir + "/report.json");
@@ -194,7 +196,7 @@ TEST(App, LiveLessonScoresEqualTheReplayedOnes) {
     const std::string rec = dir + "/R.rec", report = dir + "/report.json";
     const std::string lesson = std::string(SULCUS_SOURCE_DIR) + "/content/assets/lessons/healthy_11.json";
     // 8700 ticks: the hand's whole probing script of healthy_11 (8.58 s at 1 kHz) and a little more.
-    const Shell r = run("xvfb-run -a -n 138 -s '-screen 0 1280x800x24' " + kApp + " --lesson " + lesson +
+    const Shell r = run(kXvfb + "1280x800x24 " + kApp + " --lesson " + lesson +
                         " --device sim --record " + rec + " --ticks 8700 --frames 2 --size 800x600 --report " + report);
     ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("session recorded to " + rec), std::string::npos) << r.output;
@@ -223,7 +225,7 @@ TEST(App, DroppedTelemetryIsScoredFromTheRecording) {
     const std::string rec = dir + "/R.rec", report = dir + "/report.json";
     const std::string lesson = std::string(SULCUS_SOURCE_DIR) + "/content/assets/lessons/healthy_11.json";
     // 16 ticks of queue against frames of tens of milliseconds: samples are dropped.
-    const Shell r = run("xvfb-run -a -n 145 -s '-screen 0 1280x800x24' " + kApp + " --lesson " + lesson +
+    const Shell r = run(kXvfb + "1280x800x24 " + kApp + " --lesson " + lesson +
                         " --device sim --record " + rec + " --telemetry-queue 16 --ticks 3000 --frames 2 --size 800x600"
                         " --report " + report);
     ASSERT_EQ(r.status, 0) << r.output;
@@ -244,7 +246,7 @@ TEST(App, LessonIsRecordedToTheSessionsFolderByDefault) {
     REQUIRE_APP();
     const std::string dir = temp_dir("sessions");
     const std::string lesson = std::string(SULCUS_SOURCE_DIR) + "/content/assets/lessons/healthy_11.json";
-    const Shell r = run("SULCUS_SESSIONS_DIR=" + dir + " xvfb-run -a -n 152 -s '-screen 0 1280x800x24' " + kApp +
+    const Shell r = run("SULCUS_SESSIONS_DIR=" + dir + " " + kXvfb + "1280x800x24 " + kApp +
                         " --lesson " + lesson + " --device sim --ticks 200 --frames 2 --size 800x600");
     ASSERT_EQ(r.status, 0) << r.output;
     std::vector<std::string> files;
@@ -256,7 +258,7 @@ TEST(App, LessonIsRecordedToTheSessionsFolderByDefault) {
 
     // --record none: nothing is written.
     const std::string none = temp_dir("sessions_none");
-    const Shell r2 = run("SULCUS_SESSIONS_DIR=" + none + " xvfb-run -a -n 159 -s '-screen 0 1280x800x24' " + kApp +
+    const Shell r2 = run("SULCUS_SESSIONS_DIR=" + none + " " + kXvfb + "1280x800x24 " + kApp +
                          " --lesson " + lesson + " --device sim --record none --ticks 50 --frames 2 --size 800x600");
     ASSERT_EQ(r2.status, 0) << r2.output;
     EXPECT_TRUE(fs::is_empty(none));
@@ -281,7 +283,7 @@ TEST(App, BadLessonFileIsOneLineAndExitTwo) {
 TEST(App, InstructorModeRuns) {
     REQUIRE_APP();
     const std::string dir = temp_dir("instructor");
-    const Shell r = run("xvfb-run -a -n 166 -s '-screen 0 1280x800x24' " + kApp + " --case " + kCases +
+    const Shell r = run(kXvfb + "1280x800x24 " + kApp + " --case " + kCases +
                         "/healthy_11 --instructor --device mouse --frames 3 --size 1280x720 --screenshot " + dir +
                         "/shot.png");
     ASSERT_EQ(r.status, 0) << r.output;
@@ -294,7 +296,7 @@ TEST(App, MouseSessionOfSixtySecondsUnderXvfb) {
     REQUIRE_APP();
     const std::string dir = temp_dir("session");
     const std::string report = dir + "/report.json";
-    const Shell r = run("timeout 240 xvfb-run -a -n 173 -s '-screen 0 1920x1080x24' " + std::string(SULCUS_SOURCE_DIR) +
+    const Shell r = run("timeout 240 " + kXvfb + "1920x1080x24 " + std::string(SULCUS_SOURCE_DIR) +
                       "/tests/app/mouse_session.sh " + kApp + " " + kCases + "/healthy_11 60 " + report);
     ASSERT_EQ(r.status, 0) << r.output;
     std::ifstream in(report);

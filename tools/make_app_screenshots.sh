@@ -10,7 +10,7 @@ app="$build/bin/sulcus"
 out=docs/pictures
 
 run() {
-  if [ -n "${DISPLAY:-}" ]; then "$app" "$@"; else xvfb-run -a -s '-screen 0 1920x1080x24' "$app" "$@"; fi
+  if [ -n "${DISPLAY:-}" ]; then "$app" "$@"; else tests/app/xvfb.sh 1920x1080x24 "$app" "$@"; fi
 }
 
 # The quadrant: the probe on the floor of the 6 mm buccal pocket of 46 (pass 46 B of case.json
