@@ -411,14 +411,17 @@ TEST_F(PhantomFake, OneDevicePerProcess) {
 }
 
 TEST_F(PhantomFake, ServoLoopRunsOnThePhantomAndSendsFiniteForces) {
-    // A 5 mm cube over a slab 0.5 mm below it; the stylus is lowered 2 mm after 0.1 s.
+    // A 5 mm cube over a slab 0.5 mm below it; the stylus is lowered 2 mm from 0.1 s to 0.3 s
+    // (test thread's clock). The loop runs until stop(), which comes 200 servo ticks after the
+    // stylus is all the way down: a lagging test thread delays the stop instead of cutting the
+    // contact short.
     const TriMesh tool = make_box(Vec3(2.5 * mm));
     const TriMesh slab = make_box(Vec3(20 * mm, 2 * mm, 20 * mm), Vec3(0.0, -5.0 * mm, 0.0));
     const std::unique_ptr<Model> model = test::model_of(tool, {test::object("slab", slab)});
     ASSERT_TRUE(model);
 
     ServoConfig config;
-    config.duration_s = 0.5;
+    config.duration_s = 0.0;
     config.try_realtime = false;
     config.safety.limits.max_force_N = 1.0;
     config.safety.ramp_in_time_s = 0.05;
@@ -426,10 +429,10 @@ TEST_F(PhantomFake, ServoLoopRunsOnThePhantomAndSendsFiniteForces) {
     ServoLoop loop;
     ASSERT_EQ(loop.start(config, dev, *model), "");
 
-    uint64_t snapshots = 0, last_tick = 0;
+    uint64_t snapshots = 0, last_tick = 0, down_tick = 0;
     bool bad = false;
     const auto t0 = std::chrono::steady_clock::now();
-    while (loop.running()) {
+    for (;;) {
         const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         const double u = std::clamp((t - 0.1) / 0.2, 0.0, 1.0);
         const double m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, -2.0 * u, 0, 1};
@@ -439,10 +442,14 @@ TEST_F(PhantomFake, ServoLoopRunsOnThePhantomAndSendsFiniteForces) {
             if (s.tick != last_tick) ++snapshots;
             last_tick = s.tick;
             bad |= !std::isfinite(s.force_N.x) || !std::isfinite(s.force_N.y) || !std::isfinite(s.force_N.z);
+            if (u == 1.0 && down_tick == 0) down_tick = s.tick;
         }
+        if ((down_tick != 0 && last_tick >= down_tick + 200) || t > 20.0) break;
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
-    loop.wait();
+    ASSERT_TRUE(loop.running());
+    loop.stop();
+    EXPECT_NE(down_tick, 0u) << "the stylus was never all the way down within 20 s";
     const ServoStats st = loop.stats();
     EXPECT_GT(st.ticks, 300u);
     EXPECT_EQ(st.read_failures, 0u);
