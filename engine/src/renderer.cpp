@@ -116,6 +116,18 @@ constexpr int kMaxCcdIterations = 64;
 constexpr int kMaxPasses = 6;
 // A tool vertex more than this behind a face plane does not face it (it is across a thin part).
 constexpr double kBackFace = 1e-6;
+// The recovery round's box gives every coordinate this many constraint tolerances of room to
+// take the tool back out of a graze (local_box's `recover_m`).
+constexpr double kRecoverTolerances = 10.0;
+// How far behind a rigid object's face or edge a tool feature still faces it: kBackFace, or the
+// room the recovery round has (kRecoverTolerances tolerances) where that is less. The step's
+// start is a checked pose, so a feature pair further behind than that there is not a graze the
+// step can take the tool out of: a pair across a thin part, or one whose constraint says the
+// tool is behind where it does not penetrate (on the dense wedge at 1e-9 m: edge pairs 0.36 um
+// behind at a start the exact check finds 3e-17 m deep). Held as a constraint, it leaves no
+// feasible step, and the tool is held where it is. From the default tolerance (1e-7 m) up, this
+// is kBackFace.
+double rigid_back(const RendererSettings& S) { return std::min(kBackFace, kRecoverTolerances * S.constraint_tol_m); }
 
 using NearTri = NearTriangle;
 
@@ -1641,15 +1653,20 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
     // How far inside object o a feature may be (the last object's kept: features come grouped
     // by object).
     int in_object = -1;
-    double in_depth = 0.0;
+    double in_depth = 0.0, in_back = 0.0;
     auto in_of = [&](uint16_t o) {
         if (o != in_object) {
             in_object = o;
             in_depth = inside_reach(model, soft, o, reach);
+            in_back = model.objects[o].compliant ? kBackFace + in_depth : rigid_back(model.settings);
         }
         return in_depth;
     };
-    auto back_of = [&](uint16_t o) { return kBackFace + in_of(o); };
+    // How far behind a feature of object o a tool feature still faces it.
+    auto back_of = [&](uint16_t o) {
+        in_of(o);
+        return in_back;
+    };
     auto reach_of = [&](uint16_t o) { return reach + in_of(o); };
     // A compliant set's drift (Workspace::CompliantSet), added to once in this call: the motion
     // of the piece's vertices since the set's last gather, and the rise of the tests' bounds
@@ -3282,7 +3299,7 @@ void rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
                 const auto& t = obj.mesh.triangles[nt.tri];
                 const Vec3& p0 = obj.mesh.vertices[t[0]];
                 const double plane = glm::dot(obj.topology.triangle_normals[nt.tri], wa - p0);
-                if (plane > reach || plane < -kBackFace) continue;
+                if (plane > reach || plane < -rigid_back(model.settings)) continue;
                 const TriClosest c = closest_on_triangle(wa, p0, obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]);
                 if (c.distance > reach) continue;
                 if (key_count == kMaxKeys) return false;
@@ -3292,7 +3309,7 @@ void rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
             key_count = int(std::unique(keys, keys + key_count) - keys);
             const int atom_count = w.atom_count, alt_count = w.alt_count;
             const bool gather_full = w.gather_full;
-            for (int k = 0; k < key_count; ++k) add_feature_atoms(model, w, keys[k], wa, kBackFace);
+            for (int k = 0; k < key_count; ++k) add_feature_atoms(model, w, keys[k], wa, rigid_back(model.settings));
             bool fits = true;
             for (int k = atom_count; k < w.atom_count; ++k) {
                 if (replacing_count < kMaxReplacing) replacing[replacing_count++] = w.atoms[k];
@@ -3365,7 +3382,7 @@ void rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
                             obj.topology.triangle_normals[next.tri[0]] + obj.topology.triangle_normals[next.tri[1]];
                         EdgePair pair;
                         if (!edge_pair(a0, a1, v0, eo, glm::dot(eo, eo), bisector, reach, pair)) continue;
-                        if (pair.behind < -kBackFace) continue;
+                        if (pair.behind < -(obj.compliant ? kBackFace : rigid_back(model.settings))) continue;
                         if (replacing_count == kMaxReplacing) break;
                         Atom ee = a;
                         ee.object_edge = oe;
@@ -3583,7 +3600,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
             // when nothing is feasible without it does every coordinate get that room, so it is
             // never spent on getting closer.
             for (int round = 0; round < 2 && !solved; ++round) {
-                const double recover = round == 0 ? 0.0 : 10.0 * S.constraint_tol_m;
+                const double recover = round == 0 ? 0.0 : kRecoverTolerances * S.constraint_tol_m;
                 local_box(S, radius, target_local, motion_local, rotation_local, moved_local, turned_local, true,
                           recover, w.soft.spring_energy_J, rate_lower, rate_upper);
                 solved = solve_candidates(model, base, frame, target, target_local, rate_lower, rate_upper, reach, state,
@@ -3638,7 +3655,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                 res.stats.gather_truncated |= !gather_atoms(model, base, lower, upper, push, w);
                 solved = false;
                 for (int round = 0; round < 2 && !solved; ++round) {
-                    const double recover = round == 0 ? 0.0 : 10.0 * S.constraint_tol_m;
+                    const double recover = round == 0 ? 0.0 : kRecoverTolerances * S.constraint_tol_m;
                     local_box(S, radius, target_local, motion_local, rotation_local, moved_local, turned_local, false,
                               recover, w.soft.spring_energy_J, lower, upper);
                     solved = solve_candidates(model, base, frame, target, target_local, lower, upper, reach, state, w,
