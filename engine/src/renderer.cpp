@@ -119,15 +119,18 @@ constexpr double kBackFace = 1e-6;
 // The recovery round's box gives every coordinate this many constraint tolerances of room to
 // take the tool back out of a graze (local_box's `recover_m`).
 constexpr double kRecoverTolerances = 10.0;
-// How far behind a rigid object's face or edge a tool feature still faces it: kBackFace, or the
-// room the recovery round has (kRecoverTolerances tolerances) where that is less. The step's
+// How far behind an object's face or edge a tool feature still faces it: kBackFace on a compliant
+// object (gather adds the tool's depth in it); on a rigid one kBackFace, or the room the recovery
+// round has (kRecoverTolerances tolerances) where that is less. The step's
 // start is a checked pose, so a feature pair further behind than that there is not a graze the
 // step can take the tool out of: a pair across a thin part, or one whose constraint says the
 // tool is behind where it does not penetrate (on the dense wedge at 1e-9 m: edge pairs 0.36 um
 // behind at a start the exact check finds 3e-17 m deep). Held as a constraint, it leaves no
 // feasible step, and the tool is held where it is. From the default tolerance (1e-7 m) up, this
 // is kBackFace.
-double rigid_back(const RendererSettings& S) { return std::min(kBackFace, kRecoverTolerances * S.constraint_tol_m); }
+double back_face(const RendererSettings& S, bool compliant) {
+    return compliant ? kBackFace : std::min(kBackFace, kRecoverTolerances * S.constraint_tol_m);
+}
 
 using NearTri = NearTriangle;
 
@@ -1658,7 +1661,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         if (o != in_object) {
             in_object = o;
             in_depth = inside_reach(model, soft, o, reach);
-            in_back = model.objects[o].compliant ? kBackFace + in_depth : rigid_back(model.settings);
+            in_back = back_face(model.settings, model.objects[o].compliant) + in_depth;
         }
         return in_depth;
     };
@@ -3299,7 +3302,7 @@ void rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
                 const auto& t = obj.mesh.triangles[nt.tri];
                 const Vec3& p0 = obj.mesh.vertices[t[0]];
                 const double plane = glm::dot(obj.topology.triangle_normals[nt.tri], wa - p0);
-                if (plane > reach || plane < -rigid_back(model.settings)) continue;
+                if (plane > reach || plane < -back_face(model.settings, false)) continue;
                 const TriClosest c = closest_on_triangle(wa, p0, obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]);
                 if (c.distance > reach) continue;
                 if (key_count == kMaxKeys) return false;
@@ -3309,7 +3312,7 @@ void rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
             key_count = int(std::unique(keys, keys + key_count) - keys);
             const int atom_count = w.atom_count, alt_count = w.alt_count;
             const bool gather_full = w.gather_full;
-            for (int k = 0; k < key_count; ++k) add_feature_atoms(model, w, keys[k], wa, rigid_back(model.settings));
+            for (int k = 0; k < key_count; ++k) add_feature_atoms(model, w, keys[k], wa, back_face(model.settings, false));
             bool fits = true;
             for (int k = atom_count; k < w.atom_count; ++k) {
                 if (replacing_count < kMaxReplacing) replacing[replacing_count++] = w.atoms[k];
@@ -3382,7 +3385,7 @@ void rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
                             obj.topology.triangle_normals[next.tri[0]] + obj.topology.triangle_normals[next.tri[1]];
                         EdgePair pair;
                         if (!edge_pair(a0, a1, v0, eo, glm::dot(eo, eo), bisector, reach, pair)) continue;
-                        if (pair.behind < -(obj.compliant ? kBackFace : rigid_back(model.settings))) continue;
+                        if (pair.behind < -back_face(model.settings, obj.compliant)) continue;
                         if (replacing_count == kMaxReplacing) break;
                         Atom ee = a;
                         ee.object_edge = oe;
