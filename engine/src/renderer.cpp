@@ -1722,10 +1722,6 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
     const double far_plane = model.settings.drop_covered_atoms ? cover.far_plane() : 1e300;
     for (int i = 0; i < w.near_count; ++i) {
         const NearTri nt = w.near[i];
-        const ModelObject& obj = model.objects[nt.object];
-        const auto& t = obj.mesh.triangles[nt.tri];
-        const Vec3 &p0 = obj.mesh.vertices[t[0]], &p1 = obj.mesh.vertices[t[1]], &p2 = obj.mesh.vertices[t[2]];
-        const Vec3& n = obj.topology.triangle_normals[nt.tri];
         const double back = back_of(nt.object), far = reach_of(nt.object);
         const ToolPiece& piece = tool.pieces[nt.piece];
         // A triangle the piece is further than `far` from (by detect's lower bound: in the tissue,
@@ -1733,13 +1729,19 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         // vertex and edge of the piece: no V-F or E-E atom. Its vertices may still face a tool
         // face within the reach (F-V).
         const bool beyond = nt.lower_m > far;
-        // Only convex object vertices (and mixed ones) and convex edges meet the tool's faces
-        // and edges (F-V and E-E below).
-        const unsigned corners = obj.topology.triangle_corners[nt.tri];
         // Its vertices are no nearer the piece than its bound says, and so over some face plane
         // of the piece by plane_ratio of that (a nanometre under, for the rounding of the planes
         // and the merging of coplanar faces): beyond the reach there, they make no F-V atom.
         const bool faces_beyond = piece.plane_ratio * nt.lower_m > reach + 1e-9;
+        // Both (about half the tissue's triangles in a piece's box): nothing more of it is read.
+        if (beyond && faces_beyond) continue;
+        const ModelObject& obj = model.objects[nt.object];
+        const auto& t = obj.mesh.triangles[nt.tri];
+        const Vec3 &p0 = obj.mesh.vertices[t[0]], &p1 = obj.mesh.vertices[t[1]], &p2 = obj.mesh.vertices[t[2]];
+        const Vec3& n = obj.topology.triangle_normals[nt.tri];
+        // Only convex object vertices (and mixed ones) and convex edges meet the tool's faces
+        // and edges (F-V and E-E below).
+        const unsigned corners = obj.topology.triangle_corners[nt.tri];
         if (!faces_beyond)
             for (int k = 0; k < 3; ++k)
                 if (corners >> k & 1u) w.overts[w.overt_count++] = obj_feature(nt.object, t[k], nt.piece);
