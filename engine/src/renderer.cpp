@@ -3286,6 +3286,9 @@ void rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
             w.cand_key[w.cand_count] = 0;
             w.cand[w.cand_count++] = a;
         };
+        // How far behind a rigid object's face or edge a tool feature still faces it (only rigid
+        // atoms are swapped).
+        const double rigid_back = back_face(model.settings, false);
         // What takes a swapped atom's place.
         constexpr int kMaxReplacing = 16;
         Atom replacing[kMaxReplacing];
@@ -3304,7 +3307,7 @@ void rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
                 const auto& t = obj.mesh.triangles[nt.tri];
                 const Vec3& p0 = obj.mesh.vertices[t[0]];
                 const double plane = glm::dot(obj.topology.triangle_normals[nt.tri], wa - p0);
-                if (plane > reach || plane < -back_face(model.settings, false)) continue;
+                if (plane > reach || plane < -rigid_back) continue;
                 const TriClosest c = closest_on_triangle(wa, p0, obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]);
                 if (c.distance > reach) continue;
                 if (key_count == kMaxKeys) return false;
@@ -3314,7 +3317,7 @@ void rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
             key_count = int(std::unique(keys, keys + key_count) - keys);
             const int atom_count = w.atom_count, alt_count = w.alt_count;
             const bool gather_full = w.gather_full;
-            for (int k = 0; k < key_count; ++k) add_feature_atoms(model, w, keys[k], wa, back_face(model.settings, false));
+            for (int k = 0; k < key_count; ++k) add_feature_atoms(model, w, keys[k], wa, rigid_back);
             bool fits = true;
             for (int k = atom_count; k < w.atom_count; ++k) {
                 if (replacing_count < kMaxReplacing) replacing[replacing_count++] = w.atoms[k];
@@ -3387,7 +3390,7 @@ void rescue_virtual(const Model& model, const Pose& base, const Mat3& frame, con
                             obj.topology.triangle_normals[next.tri[0]] + obj.topology.triangle_normals[next.tri[1]];
                         EdgePair pair;
                         if (!edge_pair(a0, a1, v0, eo, glm::dot(eo, eo), bisector, reach, pair)) continue;
-                        if (pair.behind < -back_face(model.settings, obj.compliant)) continue;
+                        if (pair.behind < -rigid_back) continue;
                         if (replacing_count == kMaxReplacing) break;
                         Atom ee = a;
                         ee.object_edge = oe;
