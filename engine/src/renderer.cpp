@@ -337,13 +337,13 @@ struct Workspace {
     // the give of each one's zone there: those the pass over the start leaves unsettled.
     int guard_open[kMaxNear];
     double guard_give[kMaxNear];
-    // The tool edges (relative to their piece's first) whose boxes meet a box about an object
-    // edge in the piece's frame, by a hash of the (object, edge, piece) feature plus one (key 0:
-    // none), for a session (Workspace::owner): the box of the edge that gather queries lies inside
-    // it while the tool moves less than the room it was widened by, and those hits then hold every
-    // one of its own query's. A key sits in its hash slot or the one beside it (slot ^ 1): of a pair of
-    // edges in the tissue that share a slot, neither pushes the other out at every tick, as
-    // they did in a table of one slot a key and a quarter the size. Up to 160 hits: a probe
+    // The tool edges (relative to their piece's first) within `far` plus `room` of an object edge
+    // in the piece's frame, by a hash of the (object, edge, piece) feature plus one (key 0:
+    // none), for a session (Workspace::owner): while neither end of the edge has moved by more
+    // than the room less the rise of `far`, every other tool edge stays further than `far` from
+    // it, where no pair makes an atom. A key sits in its hash slot or the one beside it
+    // (slot ^ 1): of a pair of edges in the tissue that share a slot, neither pushes the other
+    // out at every tick, as they did in a table of one slot a key and a quarter the size. Up to 160 hits: a probe
     // deep in an inflamed floor looks a millimetre round each edge, whose box then holds more
     // than half the tip's edges (40 hits kept those edges out, and each went to the hierarchy
     // and a sort at every tick).
@@ -352,7 +352,9 @@ struct Workspace {
         uint64_t key = 0;
         uint64_t owner = 0;  // Workspace::owner
         uint64_t used = 0;  // gather_clock at the last use
-        Aabb box;
+        Vec3 at[2]{Vec3(0.0), Vec3(0.0)};  // the object edge's ends in the piece's frame at the query
+        double far = 0.0;                  // the edge's `far` at the query
+        double room = 0.0;                 // how far the hits reach past it
         int count = 0;
         uint16_t hits[kEdgeMemoHits];
     };
@@ -2040,19 +2042,20 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         const Vec3 eo = v1 - v0;
         const Vec3 bisector = obj.topology.triangle_normals[e.tri[0]] + obj.topology.triangle_normals[e.tri[1]];
         const ToolPiece& piece = tool.pieces[feature_piece(w.oedges[i])];
-        // The tool edges whose boxes come within reach of the object edge's, in the tool's frame
-        // (with room for the rounding of the move into it), in their order.
+        // The tool edges that may come within `far` of the object edge, in the tool's frame, in
+        // their order.
         const Vec3 l0 = to_tool * (v0 - base.position), l1 = to_tool * (v1 - base.position);
-        Aabb local;
-        local.grow(l0);
-        local.grow(l1);
+        const Vec3 d_l = l1 - l0;
+        const double e_l = glm::dot(d_l, d_l);
         const double far = reach_of(feature_object(w.oedges[i]));
-        local.inflate(far + 1e-12);
-        // With the near cache (RendererSettings::near_cache), from the memo while its box holds
-        // this one; else queried in a box with room for the tool to move by `far` more (at most
-        // Workspace::kEdgeMemoRoom), and kept where the memo has room for its hits. A hit of the
-        // wider box that this one's query would not have made is further than `far` from the
-        // edge, which the tests below find.
+        // With the near cache (RendererSettings::near_cache), from the memo while it holds (no
+        // end of the edge has moved further than its room less the rise of `far`); else the tool
+        // edges within `far` plus a room of `far` (at most Workspace::kEdgeMemoRoom; none
+        // without the cache): those whose boxes meet the edge's box widened by as much, less
+        // those further by their closest points (a nanometre over, for the rounding of the
+        // frames), kept where the memo has room for them. Every other tool edge is further than
+        // `far` from the edge, where edge_pair makes no atom. (Listed by distance, a tissue edge
+        // has some 60 % of the tool edges its box met.)
         int hits = 0;
         const bool memo_on = model.settings.near_cache;
         const uint64_t memo_key = w.oedges[i] + 1;
@@ -2063,16 +2066,26 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         auto owns = [&](const Workspace::EdgeHitMemo* m) { return m->key == memo_key && m->owner == w.owner; };
         Workspace::EdgeHitMemo* memo = !memo_on ? nullptr : owns(pair[0]) ? pair[0] : owns(pair[1]) ? pair[1] : nullptr;
         const uint16_t* edge_hits = w.edge_hits;
-        if (memo && memo->box.contains(local)) {
+        const double slack = memo ? memo->room - std::max(0.0, far - memo->far) : -1.0;
+        const Vec3 m0 = memo ? l0 - memo->at[0] : Vec3(0.0), m1 = memo ? l1 - memo->at[1] : Vec3(0.0);
+        if (slack >= 0.0 && glm::dot(m0, m0) <= slack * slack && glm::dot(m1, m1) <= slack * slack) {
             memo->used = w.gather_clock;
             edge_hits = memo->hits;
             hits = memo->count;
         } else {
             ++w.edge_queries;
-            Aabb box = local;
-            if (memo_on) box.inflate(std::min(far, Workspace::kEdgeMemoRoom));
+            const double room = memo_on ? std::min(far, Workspace::kEdgeMemoRoom) : 0.0;
+            const double within = far + room + 1e-9;
+            Aabb box;
+            box.grow(l0);
+            box.grow(l1);
+            box.inflate(within);
             piece.edge_bvh.query(box, [&](uint32_t e) {
-                w.edge_hits[hits++] = uint16_t(e);
+                const ModelTool::EdgeLine& line = tool.edge_lines[piece.edge_begin + e];
+                double s_, t_;
+                closest_segment_params(line.along, d_l, line.from - l0, line.length2, e_l, s_, t_);
+                const Vec3 gap = (line.from + s_ * line.along) - (l0 + t_ * d_l);
+                if (!root_exceeds(glm::dot(gap, gap), within)) w.edge_hits[hits++] = uint16_t(e);
                 return true;
             });
             std::sort(w.edge_hits, w.edge_hits + hits);
@@ -2082,7 +2095,10 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                 memo->key = memo_key;
                 memo->owner = w.owner;
                 memo->used = w.gather_clock;
-                memo->box = box;
+                memo->at[0] = l0;
+                memo->at[1] = l1;
+                memo->far = far;
+                memo->room = room;
                 memo->count = hits;
                 std::copy(w.edge_hits, w.edge_hits + hits, memo->hits);
             }
@@ -2095,8 +2111,6 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         // less than the test's margin of 1e-8 over the squared sine of the edges' angle (measured
         // over every pair of the bench scenes' runs: at most 1e-10 at squared sines over 1e-2,
         // 6e-9 between 1e-4 and 1e-3).
-        const Vec3 d_l = l1 - l0;
-        const double e_l = glm::dot(d_l, d_l);
         // A segment is no closer to the tool edge than the distance from its midpoint less its
         // half length: a cheap bound before the exact closest points, in the tool's frame, with a
         // picometre over for the rounding of the move into it.
