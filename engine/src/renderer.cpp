@@ -407,6 +407,9 @@ struct Workspace {
         double kept[kCompliantSetSlots];  // bound + moved when measured (m); -1e300: not measured
         double measured_at[kCompliantSetSlots];  // `moved` when measured (m)
         double quiet[kCompliantSetSlots];  // m, in terms of `drift`; or kQuietUnknown, kQuietNone
+        // Of a triangle that gave a feature, the piece's vertices (bits by their place in its
+        // axial order) that may come within the bounds while the drift is under `quiet`; 0: none.
+        uint64_t listed[kCompliantSetSlots];
         Vec3 axis[kToolCapsules + 1];     // the capsule points at the last query (world)
         double moved = 0.0;               // m
         Aabb query;                       // the last query's box
@@ -421,6 +424,7 @@ struct Workspace {
     // A set's old slots and quiet marks while it is gathered anew (gather_compliant_set).
     uint32_t carry_slots[kCompliantSetSlots];
     double carry_quiet[kCompliantSetSlots];
+    uint64_t carry_listed[kCompliantSetSlots];
     uint64_t compliant_clock = 0;
     // The faces of a piece that an object vertex could be most in front of, or within the tie
     // tolerance of it, while it stays within `room` of where they were found (`at`, m, in the
@@ -784,6 +788,7 @@ bool gather_compliant_set(const ModelObject& obj, const Aabb& b, bool carry, Wor
     if (old_count > 0) {
         std::copy(c.slots, c.slots + old_count, w.carry_slots);
         std::copy(c.quiet, c.quiet + old_count, w.carry_quiet);
+        std::copy(c.listed, c.listed + old_count, w.carry_listed);
     }
     c.box = b;
     c.box.inflate(Workspace::kCompliantRoom);
@@ -795,7 +800,9 @@ bool gather_compliant_set(const ModelObject& obj, const Aabb& b, bool carry, Wor
         if (c.count == Workspace::kCompliantSetSlots) return false;
         while (j < old_count && w.carry_slots[j] < slot) ++j;
         c.kept[c.count] = -1e300;
-        c.quiet[c.count] = j < old_count && w.carry_slots[j] == slot ? w.carry_quiet[j] : Workspace::kQuietUnknown;
+        const bool carried = j < old_count && w.carry_slots[j] == slot;
+        c.quiet[c.count] = carried ? w.carry_quiet[j] : Workspace::kQuietUnknown;
+        c.listed[c.count] = carried ? w.carry_listed[j] : 0;
         c.slots[c.count++] = slot;
         return true;
     });
@@ -1753,30 +1760,38 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                     w.oedges[w.oedge_count++] = obj_feature(nt.object, obj.topology.triangle_edges[nt.tri][k], nt.piece);
         if (beyond) continue;
         // A triangle a compliant set gave, clear of the piece's vertices while the set's drift is
-        // under its `quiet` (Workspace::CompliantSet): passed over. Else, unless it gave a feature
-        // the last time, its clearance is measured: how far the nearest vertex is from the tests'
-        // bounds, up to kQuietHorizon (the vertices are looked for that much further).
+        // under its `quiet` (Workspace::CompliantSet): passed over; one that gave a feature, all
+        // of the piece's vertices but those `listed` clear of it so long: only those looked at.
+        // Else its clearance is measured: how far the nearest vertex is from the tests' bounds,
+        // up to kQuietHorizon (the vertices are looked for that much further), and of one that
+        // gives a feature, the vertices nearer than that (a piece of more than 64 vertices: none
+        // listed, and such a triangle is looked at the next time without a margin).
         // (With RendererSettings::audit_quiet_triangles a quiet one is looked at all the same,
-        // to count it where a vertex came within the bounds; nothing found is kept.)
+        // to count it where a vertex that is not listed came within the bounds; nothing found
+        // of such a vertex is kept.)
         Workspace::CompliantSet* set = nullptr;
         int slot = 0;
         bool measure = false, auditing = false;
+        uint64_t listed = 0;
         if (nt.memo != 0) {
             set = &w.compliant_sets[(nt.memo >> Workspace::kMemoSlotBits) - 1];
             slot = nt.memo & (Workspace::kCompliantSetSlots - 1);
             add_drift(*set, nt.object);
             const double quiet = set->quiet[slot];
             if (quiet > set->drift) {
-                ++w.quiet_triangles;
-                if (!model.settings.audit_quiet_triangles) continue;
-                auditing = true;
+                listed = set->listed[slot];
+                w.quiet_triangles += listed == 0;
+                if (model.settings.audit_quiet_triangles) auditing = true;
+                else if (listed == 0) continue;
                 set = nullptr;
             }
-            measure = !auditing && quiet != Workspace::kQuietNone;
+            measure = set && quiet != Workspace::kQuietNone;
         }
+        const bool listed_only = listed != 0 && !auditing;
         const double horizon = measure ? kQuietHorizon : 0.0;
         double clear = horizon;  // the least clearance of a vertex looked at (measure only)
         bool featured = false;   // whether a vertex came within the tests' bounds
+        uint64_t near_bits = 0;  // the vertices (by place, under 64) nearer than the horizon (measure)
         // No point further than `far` from the triangle's bounding sphere is within `far` of it.
         const TriangleSphere& ts = obj.topology.triangle_spheres[nt.tri];
         const double sphere = ts.radius + far;
@@ -1791,10 +1806,12 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         // whole run. The slabs along the axis the run meets hold every vertex of the run (and a
         // few past its ends, which the loop passes over).
         const double shadow = sphere + horizon + axial_slack;
-        const bool by_mask = shadow < piece.cross_narrow_m;
+        const bool by_mask = listed_only || shadow < piece.cross_narrow_m;
         uint64_t candidates = 0;
         int run_lo = 0;
-        if (by_mask) {
+        if (listed_only) {
+            candidates = listed;
+        } else if (by_mask) {
             const Vec3 c = ts.centre - base.position;
             const double cu = glm::dot(cross_world[nt.piece][0], c), cw = glm::dot(cross_world[nt.piece][1], c);
             if (std::isfinite(cu) && std::isfinite(cw) && std::isfinite(along)) {
@@ -1822,7 +1839,9 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             const double plane = glm::dot(n, w.tool_world[a] - p0);
             // A vertex out of the plane's band is clear of it by as much, or more.
             if (plane > reach || plane < -back) {
-                clear = std::min(clear, std::max(plane - reach, -back - plane));
+                const double out = std::max(plane - reach, -back - plane);
+                clear = std::min(clear, out);
+                near_bits |= uint64_t(out < horizon) << (r & 63);
                 continue;
             }
             const Vec3 off = w.tool_world[a] - ts.centre;
@@ -1830,17 +1849,24 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             if (off2 > sphere * sphere) {
                 if (measure && off2 < (sphere + clear) * (sphere + clear))
                     clear = std::min(clear, std::sqrt(off2) - sphere);
+                near_bits |= uint64_t(off2 < (sphere + horizon) * (sphere + horizon)) << (r & 63);
                 continue;
             }
             TriClosest c;
             if (!closest_on_triangle_within(w.tool_world[a], p0, p1, p2, far, c)) {
-                if (measure) clear = std::min(clear, glm::length(w.tool_world[a] - c.point) - far);
+                if (measure) {
+                    const double out = glm::length(w.tool_world[a] - c.point) - far;
+                    clear = std::min(clear, out);
+                    near_bits |= uint64_t(out < horizon) << (r & 63);
+                }
                 continue;
             }
             featured = true;
-            if (auditing) {
+            near_bits |= uint64_t(1) << (r & 63);
+            if (auditing && !(r < 64 && (listed >> r & 1u))) {
                 ++w.quiet_featured;
-                break;
+                if (listed == 0) break;
+                continue;
             }
             const FeatureKey key = feature_key(obj, nt.object, nt.tri, uint32_t(a), c.region);
             if (obj.compliant) {
@@ -1861,7 +1887,14 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                 w.gather_full = true;
             }
         }
-        if (set) set->quiet[slot] = quiet_until(*set, clear, featured);
+        if (set && featured && measure && piece.vertex_count <= 64) {
+            // Every vertex not listed is at least the horizon clear of the bounds.
+            set->quiet[slot] = set->drift + horizon - 1e-12;
+            set->listed[slot] = near_bits;
+        } else if (set) {
+            set->quiet[slot] = quiet_until(*set, clear, featured);
+            set->listed[slot] = 0;
+        }
     }
     std::sort(w.feats, w.feats + w.feat_count);
     w.feat_count = static_cast<int>(std::unique(w.feats, w.feats + w.feat_count) - w.feats);
