@@ -1771,7 +1771,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         // of such a vertex is kept.)
         Workspace::CompliantSet* set = nullptr;
         int slot = 0;
-        bool measure = false, auditing = false;
+        bool measure = false, auditing = false, audit_counted = false;
         uint64_t listed = 0;
         if (nt.memo != 0) {
             set = &w.compliant_sets[(nt.memo >> Workspace::kMemoSlotBits) - 1];
@@ -1864,7 +1864,9 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             featured = true;
             near_bits |= uint64_t(1) << (r & 63);
             if (auditing && !(r < 64 && (listed >> r & 1u))) {
-                ++w.quiet_featured;
+                // Counted once a triangle.
+                w.quiet_featured += !audit_counted;
+                audit_counted = true;
                 if (listed == 0) break;
                 continue;
             }

@@ -67,8 +67,10 @@ struct RendererSettings {
     // every tick and pass measures from scratch).
     bool near_cache = true;
     // With the near cache, gather still looks at each triangle it passes over as quiet
-    // (StepStats::quiet_triangles) and counts those a vertex had in fact come within the bounds of
-    // (StepStats::quiet_featured), using nothing it finds: a check of the cache, at a cost.
+    // (StepStats::quiet_triangles), and at all the vertices of one whose search it narrows to the
+    // vertices listed near it, and counts those a vertex (not listed) had in fact come within the
+    // bounds of (StepStats::quiet_featured), using nothing it finds of such a vertex: a check of
+    // the cache, at a cost.
     bool audit_quiet_triangles = false;
     // Leave out a candidate that swaps an atom holding nothing in the default set's answer for
     // its alternative (that answer the first QP from the step's start): it cannot have less
