@@ -337,14 +337,14 @@ struct Workspace {
     // the give of each one's zone there: those the pass over the start leaves unsettled.
     int guard_open[kMaxNear];
     double guard_give[kMaxNear];
-    // The tool edges (relative to their piece's first) within `far` plus `room` of an object edge
-    // in the piece's frame, by a hash of the (object, edge, piece) feature plus one (key 0:
-    // none), for a session (Workspace::owner): while neither end of the edge has moved by more
-    // than the room less the rise of `far`, every other tool edge stays further than `far` from
-    // it, where no pair makes an atom. A key sits in its hash slot or the one beside it
-    // (slot ^ 1): of a pair of edges in the tissue that share a slot, neither pushes the other
-    // out at every tick, as they did in a table of one slot a key and a quarter the size. Up to 160 hits: a probe
-    // deep in an inflamed floor looks a millimetre round each edge, whose box then holds more
+    // The tool edges (relative to their piece's first) within `far` plus a room (edge_memo_room)
+    // of an object edge in the piece's frame, by a hash of the (object, edge, piece) feature plus
+    // one (key 0: none), for a session (Workspace::owner): while neither end of the edge has moved
+    // by more than the room less the rise of `far`, every other tool edge stays further than
+    // `far` from it, where no pair makes an atom. A key sits in its hash slot or the one beside
+    // it (slot ^ 1): of a pair of edges in the tissue that share a slot, neither pushes the other
+    // out at every tick, as they did in a table of one slot a key and a quarter the size. Up to
+    // 160 hits: a probe deep in an inflamed floor looks a millimetre round each edge, whose box then holds more
     // than half the tip's edges (40 hits kept those edges out, and each went to the hierarchy
     // and a sort at every tick).
     static constexpr int kEdgeMemoHits = 160;
@@ -354,7 +354,6 @@ struct Workspace {
         uint64_t used = 0;  // gather_clock at the last use
         Vec3 at[2]{Vec3(0.0), Vec3(0.0)};  // the object edge's ends in the piece's frame at the query
         double far = 0.0;                  // the edge's `far` at the query
-        double room = 0.0;                 // how far the hits reach past it
         int count = 0;
         uint16_t hits[kEdgeMemoHits];
     };
@@ -364,6 +363,8 @@ struct Workspace {
     // The most room a memo's box is widened by (m): in the tissue, where an edge's reach is the
     // tool's depth in it, a box widened by all of that holds more hits than a memo keeps.
     static constexpr double kEdgeMemoRoom = 1e-4;
+    // How far past `far` (m) an edge memo's hits reach: `far`, at most kEdgeMemoRoom.
+    static double edge_memo_room(double far) { return std::min(far, kEdgeMemoRoom); }
     // The triangles of a compliant object near a piece, kept between ticks (with the near
     // cache): the slots (Bvh::query_slots) whose boxes overlap `box`, the piece's query box of
     // some tick widened by kCompliantRoom. While a later query box lies inside it, that query's
@@ -2085,10 +2086,10 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         const double far = reach_of(feature_object(w.oedges[i]));
         // With the near cache (RendererSettings::near_cache), from the memo while it holds (no
         // end of the edge has moved further than its room less the rise of `far`); else the tool
-        // edges within `far` plus a room of `far` (at most Workspace::kEdgeMemoRoom; none
-        // without the cache): those whose boxes meet the edge's box widened by as much, less
-        // those further by their closest points (a nanometre over, for the rounding of the
-        // frames), kept where the memo has room for them. Every other tool edge is further than
+        // edges within `far` plus a room (Workspace::edge_memo_room; none without the cache):
+        // those whose boxes meet the edge's box widened by as much, less those further by their
+        // closest points (a nanometre over, for the rounding of the frames), kept where the memo
+        // has room for them. Every other tool edge is further than
         // `far` from the edge, where edge_pair makes no atom. (Listed by distance, a tissue edge
         // has some 60 % of the tool edges its box met.)
         int hits = 0;
@@ -2101,7 +2102,8 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         auto owns = [&](const Workspace::EdgeHitMemo* m) { return m->key == memo_key && m->owner == w.owner; };
         Workspace::EdgeHitMemo* memo = !memo_on ? nullptr : owns(pair[0]) ? pair[0] : owns(pair[1]) ? pair[1] : nullptr;
         const uint16_t* edge_hits = w.edge_hits;
-        const double slack = memo ? memo->room - std::max(0.0, far - memo->far) : -1.0;
+        const double slack =
+            memo ? Workspace::edge_memo_room(memo->far) - std::max(0.0, far - memo->far) : -1.0;
         const Vec3 m0 = memo ? l0 - memo->at[0] : Vec3(0.0), m1 = memo ? l1 - memo->at[1] : Vec3(0.0);
         if (slack >= 0.0 && glm::dot(m0, m0) <= slack * slack && glm::dot(m1, m1) <= slack * slack) {
             memo->used = w.gather_clock;
@@ -2109,7 +2111,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             hits = memo->count;
         } else {
             ++w.edge_queries;
-            const double room = memo_on ? std::min(far, Workspace::kEdgeMemoRoom) : 0.0;
+            const double room = memo_on ? Workspace::edge_memo_room(far) : 0.0;
             const double within = far + room + 1e-9;
             Aabb box;
             box.grow(l0);
@@ -2133,7 +2135,6 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                 memo->at[0] = l0;
                 memo->at[1] = l1;
                 memo->far = far;
-                memo->room = room;
                 memo->count = hits;
                 std::copy(w.edge_hits, w.edge_hits + hits, memo->hits);
             }
