@@ -251,6 +251,7 @@ struct Workspace {
     PieceReach prior_reach[kMaxToolPieces];
     int tests = 0;  // triangle tests of this tick (StepStats::triangles_tested)
     int compliant_gathers = 0;  // StepStats::compliant_gathers
+    int bounds_measured = 0;    // tissue triangles' bounds measured in this tick (gather_in_box)
     int quiet_triangles = 0;    // StepStats::quiet_triangles
     int edge_queries = 0;       // StepStats::edge_queries
     int face_searches = 0;      // StepStats::face_searches
@@ -685,6 +686,12 @@ constexpr int kHeavyDetectTests = 64;
 // Triangles tested in the whole tick that leave room for a double slice: about half the ticks
 // in contact on the dense wedge test fewer, and cost under 0.6 M instructions (p99) with it.
 constexpr int kLightTests = 40;
+// Work that comes in bursts and makes a tick heavy (tend_superset, tend_compliant_sets): tissue
+// bounds measured (a tissue set gathered anew has some 700 measured at the next tick, and again
+// as they fall due together kRemeasureMotion on), and edge memos made anew (a crown's edges in a
+// fast stroke, some 50-90 at once).
+constexpr int kHeavyBoundsMeasured = 256;
+constexpr int kHeavyEdgeQueries = 32;
 
 // Piece k's superset for a tick of reach `reach` at pose `at` (capsules `axis`): the current one
 // while it holds, the one in progress once complete, and a new one gathered at once when neither
@@ -724,26 +731,29 @@ PieceNearCache* piece_superset(const Model& model, NearCache& c, size_t k, const
 }
 
 // How much a tick did before the end-of-tick slice (tend_superset): another pass or a release;
-// many distance tests in detect; few triangles tested in all; neither.
-enum class Load { Passes, Tests, Light, Usual };
+// many distance tests in detect or a burst of other work (a tissue set gathered anew, many of its
+// bounds measured, many edge memos made anew, a second linearization, more than two candidates);
+// few triangles tested in all; neither.
+enum class Load { Passes, Heavy, Light, Usual };
 
-// At the end of a tick: a slice of the superset in progress, or its install once complete. A tick
-// with another pass or a release leaves it to a lighter one while the current superset had a
-// tenth of its margin left at its last use, one with many distance tests in detect while it had
-// three tenths, so that the costs seldom meet; a light tick (few triangles tested) takes a double
+// At the end of a tick: a slice of the superset in progress, or its install once complete (true
+// when it did either). A tick with another pass or a release leaves it to a lighter one while the
+// current superset had a tenth of its margin left at its last use, a heavy one while it had three
+// tenths, so that the costs seldom meet; a light tick (few triangles tested) takes a double
 // slice. Nothing for a build of another model (a tick that never reached the cache's check of the
 // model, near_cache_begin).
-void tend_superset(const Model& model, NearCache& c, Load load) {
+bool tend_superset(const Model& model, NearCache& c, Load load) {
     SupersetBuild& b = c.build;
-    if (!b.active || c.model_serial != model.serial) return;
+    if (!b.active || c.model_serial != model.serial) return false;
     const PieceNearCache& pc = c.piece[b.piece];
-    if (load == Load::Passes || load == Load::Tests) {
+    if (load == Load::Passes || load == Load::Heavy) {
         const double spare = load == Load::Passes ? 0.1 : 0.3;
-        if (pc.valid && pc.room_m > spare * pc.margin_m) return;
+        if (pc.valid && pc.room_m > spare * pc.margin_m) return false;
     }
     // Walked to its end by the last slice: installed now, the walk's tick having had its slice.
     if (b.object >= model.objects.size()) install_superset(model, c);
     else advance_superset(model, c, load == Load::Light ? 2 * kSupersetSlice : kSupersetSlice);
+    return true;
 }
 
 // Whether the earlier pass's complete near set (Workspace::prior) holds every triangle piece k can
@@ -817,16 +827,21 @@ double compliant_room_left(const Workspace::CompliantSet& c) {
 }
 
 // At the end of a tick: the compliant set of this model that has the least room left, once that
-// is under kCompliantRefresh of Workspace::kCompliantRoom, gathered anew about its last query box.
+// is under kCompliantRefresh of Workspace::kCompliantRoom (kCompliantRefreshBusy after a `busy`
+// tick: one that had a superset's slice or a burst of work), gathered anew about its last query box.
 // The tool's pieces move together, and their sets left their boxes at the same tick (five walks
 // of the tissue's hierarchy and some thousand triangles measured in one tick); one a tick, ahead
 // of need, spreads them. What a query gets does not change: a set whose box holds it gives a fresh
 // query's triangles in the same order, and measures those it has no bound for. Only the lower
 // bounds they carry were measured at other times, and every use takes them as bounds.
 constexpr double kCompliantRefresh = 0.5;
-void tend_compliant_sets(const Model& model, Workspace& w) {
+// A gathering anew costs some 125 K instructions and has the set's bounds measured at the next
+// tick (some 700 of them): a busy tick leaves it to a later one until the room left falls under
+// this share of the room. The room lasts several ticks of a fast stroke, so the costs seldom meet.
+constexpr double kCompliantRefreshBusy = 0.25;
+void tend_compliant_sets(const Model& model, Workspace& w, bool busy) {
     Workspace::CompliantSet* most = nullptr;
-    double least = kCompliantRefresh * Workspace::kCompliantRoom;
+    double least = (busy ? kCompliantRefreshBusy : kCompliantRefresh) * Workspace::kCompliantRoom;
     for (Workspace::CompliantSet& c : w.compliant_sets) {
         if (c.owner != w.owner || c.object >= model.objects.size()) continue;
         const double left = compliant_room_left(c);
@@ -949,6 +964,7 @@ void tend_compliant_sets(const Model& model, Workspace& w) {
     auto remember = [&](int slot, double bound) {
         c.kept[slot] = bound + c.moved;
         c.measured_at[slot] = c.moved;
+        ++w.bounds_measured;
     };
     const std::vector<uint32_t>& order = obj.bvh.order();
 #if defined(__AVX2__)
@@ -3490,6 +3506,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     w.tests = 0;
     w.detect_tests = 0;
     w.compliant_gathers = 0;
+    w.bounds_measured = 0;
     w.quiet_triangles = 0;
     w.edge_queries = 0;
     w.face_searches = 0;
@@ -3729,12 +3746,17 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     if (model.settings.near_cache) {
         // The superset in progress gets its slice where this tick has room for it.
         const auto t0 = Clock::now();
-        const Load load = res.stats.passes > 0 || res.stats.released ? Load::Passes
-                          : w.detect_tests >= kHeavyDetectTests          ? Load::Tests
+        // Work of this tick that came in a burst: the superset's slice and a tissue set's
+        // gathering anew go to other ticks while they have room (the costs seldom meet).
+        const bool burst = w.compliant_gathers > 0 || w.bounds_measured >= kHeavyBoundsMeasured ||
+                           w.edge_queries >= kHeavyEdgeQueries || res.stats.relinearizations > 1 ||
+                           res.stats.candidates > 2;
+        const Load load = res.stats.passes > 0 || res.stats.released    ? Load::Passes
+                          : w.detect_tests >= kHeavyDetectTests || burst ? Load::Heavy
                           : w.tests <= kLightTests                       ? Load::Light
                                                                          : Load::Usual;
-        tend_superset(model, cache, load);
-        if (model.any_compliant) tend_compliant_sets(model, w);
+        const bool sliced = tend_superset(model, cache, load);
+        if (model.any_compliant) tend_compliant_sets(model, w, sliced || burst);
         stage_detect += micros(t0, Clock::now());
     }
     bool base_stands = false;
