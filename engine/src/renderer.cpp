@@ -345,9 +345,9 @@ struct Workspace {
     // `far` from it, where no pair makes an atom. A key sits in its hash slot or the one beside
     // it (slot ^ 1): of a pair of edges in the tissue that share a slot, neither pushes the other
     // out at every tick, as they did in a table of one slot a key and a quarter the size. Up to
-    // 160 hits: a probe deep in an inflamed floor looks a millimetre round each edge, whose box then holds more
-    // than half the tip's edges (40 hits kept those edges out, and each went to the hierarchy
-    // and a sort at every tick).
+    // 160 hits: a probe deep in an inflamed floor looks a millimetre round each edge, which then
+    // holds more than half the tip's edges within reach (40 hits kept those edges out, and each
+    // went to the hierarchy and a sort at every tick).
     static constexpr int kEdgeMemoHits = 160;
     struct EdgeHitMemo {
         uint64_t key = 0;
@@ -361,8 +361,8 @@ struct Workspace {
     static constexpr int kEdgeMemoBits = 12;
     EdgeHitMemo edge_memo[1 << kEdgeMemoBits];
     uint64_t gather_clock = 0;  // counts gather_atoms' calls
-    // The most room a memo's box is widened by (m): in the tissue, where an edge's reach is the
-    // tool's depth in it, a box widened by all of that holds more hits than a memo keeps.
+    // The most room a memo's hits reach past `far` (m): in the tissue, where an edge's reach is the
+    // tool's depth in it, a room of all of that holds more hits than a memo keeps.
     static constexpr double kEdgeMemoRoom = 1e-4;
     // How far past `far` (m) an edge memo's hits reach: `far`, at most kEdgeMemoRoom.
     static double edge_memo_room(double far) { return std::min(far, kEdgeMemoRoom); }
@@ -2105,9 +2105,9 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         // edges within `far` plus a room (Workspace::edge_memo_room; none without the cache):
         // those whose boxes meet the edge's box widened by as much, less those further by their
         // closest points (a nanometre over, for the rounding of the frames), kept where the memo
-        // has room for them. Every other tool edge is further than
-        // `far` from the edge, where edge_pair makes no atom. (Listed by distance, a tissue edge
-        // has some 60 % of the tool edges its box met.)
+        // has room for them. Every other tool edge is further than `far` from the edge, where
+        // edge_pair makes no atom. (Listed by distance, a tissue edge has some 60 % of the tool
+        // edges its box met.)
         int hits = 0;
         const bool memo_on = model.settings.near_cache;
         const uint64_t memo_key = w.oedges[i] + 1;
