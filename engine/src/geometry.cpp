@@ -8,50 +8,6 @@
 
 namespace sulcus {
 
-namespace {
-
-// closest_on_triangle's point and feature, without the distance.
-inline void closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, TriClosest& r) {
-    // Voronoi regions of the triangle, tested in turn (vertex, edge, face).
-    const Vec3 ab = b - a, ac = c - a, ap = p - a;
-    const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
-    if (d1 <= 0.0 && d2 <= 0.0) {
-        r.point = a;
-        r.region = TriRegion::Vertex0;
-    } else {
-        const Vec3 bp = p - b;
-        const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
-        const Vec3 cp = p - c;
-        const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
-        const double vc = d1 * d4 - d3 * d2;
-        const double vb = d5 * d2 - d1 * d6;
-        const double va = d3 * d6 - d5 * d4;
-        if (d3 >= 0.0 && d4 <= d3) {
-            r.point = b;
-            r.region = TriRegion::Vertex1;
-        } else if (d6 >= 0.0 && d5 <= d6) {
-            r.point = c;
-            r.region = TriRegion::Vertex2;
-        } else if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
-            r.point = a + (d1 / (d1 - d3)) * ab;
-            r.region = TriRegion::Edge0;
-        } else if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
-            const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-            r.point = b + w * (c - b);
-            r.region = TriRegion::Edge1;
-        } else if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
-            r.point = a + (d2 / (d2 - d6)) * ac;
-            r.region = TriRegion::Edge2;
-        } else {
-            const double den = 1.0 / (va + vb + vc);
-            r.point = a + ab * (vb * den) + ac * (vc * den);
-            r.region = TriRegion::Face;
-        }
-    }
-}
-
-}  // namespace
-
 TriClosest closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
     TriClosest r;
     closest_point_on_triangle(p, a, b, c, r);
@@ -59,15 +15,6 @@ TriClosest closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
     return r;
 }
 
-bool closest_on_triangle_within(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, double within,
-                                TriClosest& r) {
-    closest_point_on_triangle(p, a, b, c, r);
-    const Vec3 d = p - r.point;
-    const double d2 = glm::dot(d, d);
-    if (root_exceeds(d2, within)) return false;
-    r.distance = std::sqrt(d2);
-    return true;
-}
 
 SegmentClosest closest_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
     SegmentClosest r;

@@ -2091,8 +2091,6 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         const MeshEdge& e = obj.topology.edges[feature_id(w.oedges[i])];
         const Vec3& v0 = obj.mesh.vertices[e.v[0]];
         const Vec3& v1 = obj.mesh.vertices[e.v[1]];
-        const Vec3 eo = v1 - v0;
-        const Vec3 bisector = obj.topology.triangle_normals[e.tri[0]] + obj.topology.triangle_normals[e.tri[1]];
         const ToolPiece& piece = tool.pieces[feature_piece(w.oedges[i])];
         // The tool edges that may come within `far` of the object edge, in the tool's frame, in
         // their order.
@@ -2166,12 +2164,14 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         // A segment is no closer to the tool edge than the distance from its midpoint less its
         // half length: a cheap bound before the exact closest points, in the tool's frame, with a
         // picometre over for the rounding of the move into it.
-        const Vec3 mid_l = 0.5 * (l0 + l1);
-        const double eo2 = glm::dot(eo, eo);
-        const double near_o = far + 0.5 * glm::length(eo) + 1e-12;
         const int open = pairs_not_at_an_end(tool.edge_lines.data() + piece.edge_begin, edge_hits, hits, d_l, l0, e_l,
                                              w.edge_open);
         if (open == 0) continue;
+        const Vec3 mid_l = 0.5 * (l0 + l1);
+        const Vec3 eo = v1 - v0;
+        const double eo2 = glm::dot(eo, eo);
+        const double near_o = far + 0.5 * glm::length(eo) + 1e-12;
+        const Vec3 bisector = obj.topology.triangle_normals[e.tri[0]] + obj.topology.triangle_normals[e.tri[1]];
         // An atom of the pair no further than `covered` from either side of the edge is covered by
         // its zone's give (ZoneCover), as is every pair whose tool edge passes that close to the
         // edge's midpoint (no line is further from the edge than that); 0 where none is. The same
