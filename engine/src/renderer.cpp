@@ -95,6 +95,7 @@ double micros(Clock::time_point a, Clock::time_point b) {
 constexpr int kMaxToolVertices = 4096;
 constexpr int kMaxToolFaces = 4096;
 constexpr int kMaxToolEdges = 3 * kMaxToolVertices;
+static_assert(kMaxToolVertices <= 4096, "a feature key keeps its tool vertex in 12 bits (packed_feature)");
 static_assert(kMaxToolEdges <= 65536, "a piece's edges are counted in 16 bits (Workspace::edge_hits, EdgeHitMemo::hits)");
 static_assert(kToolCapsules <= 16, "Bvh::query_capsule_chain takes at most 16 capsules");
 constexpr int kMaxNear = 8192;
@@ -150,6 +151,16 @@ struct FeatureKey {
         return a == o.a && object == o.object && type == o.type && id == o.id;
     }
 };
+
+// A key as one number in the same order: the tool vertex in the top 12 bits (kMaxToolVertices),
+// then the object, the type (0-2) and the feature's id. Sorted so, the keys sort as
+// FeatureKey::operator< sorts them.
+inline uint64_t packed_feature(const FeatureKey& k) {
+    return uint64_t(k.a) << 52 | uint64_t(k.object) << 36 | uint64_t(k.type) << 32 | k.id;
+}
+inline FeatureKey unpacked_feature(uint64_t p) {
+    return FeatureKey{uint32_t(p >> 52), uint16_t(p >> 36), uint8_t(p >> 32 & 0xfu), uint32_t(p)};
+}
 
 // A tool vertex facing a feature of a compliant object: its height over the triangle's plane,
 // whether it is inside (behind the face, over it), and how far the face's normal points along the
@@ -259,6 +270,7 @@ struct Workspace {
     int detect_tests = 0;  // detect's distance tests of this tick (judge_near)
     FeatureKey feats[kMaxFeatures];
     int feat_count = 0;
+    uint64_t feat_keys[kMaxFeatures];  // feats packed (packed_feature), for their sort
     bool gather_full = false;  // an atom or feature of this gather did not fit
     Inside inside[kMaxFeatures];
     int inside_count = 0;
@@ -1624,6 +1636,16 @@ void remove_covered_atoms(const ZoneCover& c, int count, Workspace& w) {
     w.atom_count = kept;
 }
 
+// The gather's features in key order without repeats (neighbouring triangles give a tool vertex
+// the same edge or vertex): packed into numbers, the repeats dropped and the rest sorted by
+// sort_unique, as std::sort and std::unique would leave them.
+void sort_features(Workspace& w) {
+    static_assert(kMaxObjFeatures >= kMaxFeatures, "feature_scratch holds a gather's features");
+    for (int i = 0; i < w.feat_count; ++i) w.feat_keys[i] = packed_feature(w.feats[i]);
+    w.feat_count = sort_unique(w.feat_keys, w.feature_scratch, w.feat_count, w.feature_table);
+    for (int i = 0; i < w.feat_count; ++i) w.feats[i] = unpacked_feature(w.feat_keys[i]);
+}
+
 // An E-E atom's pair (Type 2, on the dynamic plane of eq. 7): tool edge a0-a1 and object edge
 // from v0 along eo (eo2 its squared length, bisector the sum of its faces' normals).
 struct EdgePair {
@@ -1915,8 +1937,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             set->listed[slot] = 0;
         }
     }
-    std::sort(w.feats, w.feats + w.feat_count);
-    w.feat_count = static_cast<int>(std::unique(w.feats, w.feats + w.feat_count) - w.feats);
+    sort_features(w);
     if (w.inside_count > 0) {
         // Features of compliant objects. A vertex outside the object (behind none of the faces
         // over it) is held as anywhere else. A vertex inside, where the object gives way, is held
@@ -1971,8 +1992,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             }
             i = j;
         }
-        std::sort(w.feats, w.feats + w.feat_count);
-        w.feat_count = static_cast<int>(std::unique(w.feats, w.feats + w.feat_count) - w.feats);
+        sort_features(w);
     }
     for (int i = 0; i < w.feat_count; ++i)
         add_feature_atoms(model, w, w.feats[i], w.tool_world[w.feats[i].a], back_of(w.feats[i].object));
