@@ -427,7 +427,7 @@ TEST(RootExceeds, TheTriangleTestWithinABoundIsTheTriangleTest) {
         for (const double within : {full.distance, std::nextafter(full.distance, 0.0),
                                     std::nextafter(full.distance, HUGE_VAL), 0.5 * full.distance, 2.0 * full.distance}) {
             TriClosest r;
-            const bool in = closest_on_triangle_within(p, a, b, c, within, r);
+            const bool in = closest_on_triangle_within(p, a, b, c, b - a, c - a, within, r);
             ASSERT_EQ(in, !(full.distance > within)) << i;
             if (!in) continue;
             EXPECT_EQ(r.region, full.region);

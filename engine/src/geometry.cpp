@@ -10,7 +10,7 @@ namespace sulcus {
 
 TriClosest closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
     TriClosest r;
-    closest_point_on_triangle(p, a, b, c, r);
+    closest_point_on_triangle(p, a, b, c, b - a, c - a, r);
     r.distance = glm::length(p - r.point);
     return r;
 }

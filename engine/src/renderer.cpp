@@ -1848,6 +1848,9 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         const bool by_mask = listed_only || shadow < piece.cross_narrow_m;
         uint64_t candidates = 0;
         int run_lo = 0;
+        // The triangle's edges from p0, taken once a vertex first needs the closest point.
+        Vec3 e01, e02;
+        bool edges_known = false;
         if (listed_only) {
             candidates = listed;
         } else if (by_mask) {
@@ -1891,8 +1894,13 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                 near_bits |= uint64_t(off2 < (sphere + horizon) * (sphere + horizon)) << (r & 63);
                 continue;
             }
+            if (!edges_known) {
+                e01 = p1 - p0;
+                e02 = p2 - p0;
+                edges_known = true;
+            }
             TriClosest c;
-            if (!closest_on_triangle_within(w.tool_world[a], p0, p1, p2, far, c)) {
+            if (!closest_on_triangle_within(w.tool_world[a], p0, p1, p2, e01, e02, far, c)) {
                 if (measure) {
                     const double out = glm::length(w.tool_world[a] - c.point) - far;
                     clear = std::min(clear, out);
