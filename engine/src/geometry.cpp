@@ -15,7 +15,6 @@ TriClosest closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
     return r;
 }
 
-
 SegmentClosest closest_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
     SegmentClosest r;
     closest_segment_params(p0, p1, q0, q1, r.s, r.t);

@@ -2189,12 +2189,13 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         // less than the test's margin of 1e-8 over the squared sine of the edges' angle (measured
         // over every pair of the bench scenes' runs: at most 1e-10 at squared sines over 1e-2,
         // 6e-9 between 1e-4 and 1e-3).
-        // A segment is no closer to the tool edge than the distance from its midpoint less its
-        // half length: a cheap bound before the exact closest points, in the tool's frame, with a
-        // picometre over for the rounding of the move into it.
         const int open = pairs_not_at_an_end(tool.edge_lines.data() + piece.edge_begin, edge_hits, hits, d_l, l0, e_l,
                                              w.edge_open);
         if (open == 0) continue;
+        // The rest of the edge's own quantities, for an edge left a pair. A segment is no closer
+        // to the tool edge than the distance from its midpoint less its half length: a cheap bound
+        // before the exact closest points, in the tool's frame, with a picometre over for the
+        // rounding of the move into it.
         const Vec3 mid_l = 0.5 * (l0 + l1);
         const Vec3 eo = v1 - v0;
         const double eo2 = glm::dot(eo, eo);
