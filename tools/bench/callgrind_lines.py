@@ -15,6 +15,13 @@ their own lines, not on their callers'.
     tools/bench/callgrind_lines.py cg.out build/bin/sulcus-cli engine/src/renderer.cpp 1 4000 [TOP]
 
 Prints the total and the TOP (default 40) costliest lines.
+
+OUT may also be several outputs joined by commas, such as the per-tick dumps of a window of ticks
+(callgrind with --dump-before on the step as in tick_instructions.sh, plus --dump-instr=yes: dump
+k >= 3 holds tick k - 3); their costs are added and printed per output, in thousands:
+
+    tools/bench/callgrind_lines.py $(seq -s, -f 'cg/part.%g' 2283 2312) build/bin/sulcus-cli \
+        engine/src/renderer.cpp 1 4000
 """
 import collections
 import os
@@ -62,13 +69,8 @@ def cost_per_line(binary, cost, source, first, last, chains=None):
     return per_line
 
 
-def main():
-    if len(sys.argv) < 6:
-        sys.exit(__doc__)
-    out, binary, source, first, last = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4]), int(sys.argv[5])
-    top = int(sys.argv[6]) if len(sys.argv) > 6 else 40
-    target = os.path.basename(binary)
-    cost = collections.Counter()
+def read_cost(out, target, cost):
+    """Adds the instructions of `target` in callgrind output `out` to `cost`, by address."""
     names = {}
 
     def name(kind, text):
@@ -82,6 +84,7 @@ def main():
     obj = None
     addr = 0
     after_calls = False
+    found = False
     with open(out) as f:
         for line in f:
             if line.startswith('ob='):
@@ -110,15 +113,33 @@ def main():
                 continue
             if obj and os.path.basename(obj) == target and len(parts) >= 3:
                 cost[addr] += int(parts[2])
-    if not cost:
-        sys.exit(f'callgrind_lines.py: {out}: no instructions of {target} (written with --dump-instr=yes?)')
+                found = True
+    return found
+
+
+def main():
+    if len(sys.argv) < 6:
+        sys.exit(__doc__)
+    outs, binary, source, first, last = sys.argv[1].split(','), sys.argv[2], sys.argv[3], int(sys.argv[4]), int(sys.argv[5])
+    top = int(sys.argv[6]) if len(sys.argv) > 6 else 40
+    target = os.path.basename(binary)
+    cost = collections.Counter()
+    found = False
+    for out in outs:
+        found |= read_cost(out, target, cost)
+    if not found:
+        sys.exit(f'callgrind_lines.py: {sys.argv[1]}: no instructions of {target} (written with --dump-instr=yes?)')
 
     per_line = cost_per_line(binary, cost, source, first, last)
 
     lines = open(source).read().split('\n')
-    print(f'total {sum(per_line.values()) / 1e6:.1f} M instructions on {source} lines {first}-{last}')
+    if len(outs) == 1:
+        scale, unit, what = 1e6, 'M', ''
+    else:
+        scale, unit, what = 1e3 * len(outs), 'K', f' per output ({len(outs)} outputs)'
+    print(f'total {sum(per_line.values()) / scale:.1f} {unit} instructions{what} on {source} lines {first}-{last}')
     for number, n in sorted(per_line.items(), key=lambda x: -x[1])[:top]:
-        print(f'{n / 1e6:9.1f} M {number:6} {lines[number - 1].strip()[:100]}')
+        print(f'{n / scale:9.1f} {unit} {number:6} {lines[number - 1].strip()[:100]}')
 
 
 if __name__ == '__main__':
