@@ -85,3 +85,23 @@ TEST(RadixSort, DedupeTableSurvivesItsStampWrappingRound) {
     expect_sorted_like_std(first);
     EXPECT_EQ(table.now, 1u);
 }
+
+TEST(RadixSort, DropRepeatsKeepsTheFirstOfEachKeyInOrder) {
+    // The order gather's F-V and E-E loops take their features in: each distinct key once, where
+    // it first came, whatever earlier calls left in the table.
+    std::mt19937_64 rng(17);
+    DedupeTable& table = shared_table();
+    for (int round = 0; round < 50; ++round) {
+        const int count = int(rng() % 700);
+        std::vector<uint64_t> keys(size_t(count) + 1);
+        for (uint64_t& k : keys) k = (rng() % 2) << 40 | (rng() % 200) << 8 | (rng() % 3);
+        std::vector<uint64_t> expected;
+        for (int i = 0; i < count; ++i)
+            if (std::find(expected.begin(), expected.end(), keys[size_t(i)]) == expected.end())
+                expected.push_back(keys[size_t(i)]);
+        std::vector<uint64_t> scratch(keys.size());
+        const int n = drop_repeats(keys.data(), scratch.data(), count, table);
+        ASSERT_EQ(n, int(expected.size())) << "round " << round;
+        EXPECT_TRUE(std::equal(expected.begin(), expected.end(), keys.begin())) << "round " << round;
+    }
+}

@@ -58,10 +58,10 @@ struct DedupeTable {
     uint32_t now = 0;
 };
 
-// Sorts and drops repeats, as radix_sort_unique does, for inputs that repeat most keys (the
-// features of neighbouring triangles): the repeats go first, by the table, then the distinct
-// keys are sorted. Inputs too large for the table are radix-sorted whole.
-inline int sort_unique(uint64_t* keys, uint64_t* scratch, int count, DedupeTable& table) {
+// Drops repeats by the table, keeping the first of each key in place and in order; returns the
+// distinct keys' count. Inputs too large for the table are sorted as radix_sort_unique does
+// (distinct, but in key order).
+inline int drop_repeats(uint64_t* keys, uint64_t* scratch, int count, DedupeTable& table) {
     if (count > DedupeTable::kSlots / 2) return radix_sort_unique(keys, scratch, count);
     if (count < 2) return count;
     if (++table.now == 0) {
@@ -88,6 +88,16 @@ inline int sort_unique(uint64_t* keys, uint64_t* scratch, int count, DedupeTable
         table.key[h] = k;
         keys[n++] = k;
     }
+    return n;
+}
+
+// Sorts and drops repeats, as radix_sort_unique does, for inputs that repeat most keys (the
+// features of neighbouring triangles): the repeats go first, by the table, then the distinct
+// keys are sorted. Inputs too large for the table are radix-sorted whole.
+inline int sort_unique(uint64_t* keys, uint64_t* scratch, int count, DedupeTable& table) {
+    if (count > DedupeTable::kSlots / 2) return radix_sort_unique(keys, scratch, count);
+    const int n = drop_repeats(keys, scratch, count, table);
+    if (n < 2) return n;
     if (n > 256) {
         const uint64_t* sorted = radix_sort(keys, scratch, n);
         if (sorted != keys) std::memcpy(keys, sorted, sizeof(uint64_t) * size_t(n));
