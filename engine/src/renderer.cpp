@@ -1691,12 +1691,14 @@ struct EdgePair {
     return true;
 }
 
-// The atoms gather made from w.first on, each for its object feature (w.atom_feature), put in the
+// The atoms gather made from `first` on, each for its object feature (w.atom_feature), put in the
 // order of those features and, for one feature, in the order they were made; with `alts`, the
-// alternatives made with them (w.alt_made) appended to w.alts in the same order, as many as fit.
-// The F-V and E-E loops take their features as the table that drops the repeats leaves them (in
-// the near set's order): this gives the atoms and alternatives the order that taking the
-// features sorted gave them, without sorting the features (some hundreds a tick) first.
+// alternatives made with them (w.alt_made, each replacing the one atom of its own feature)
+// appended to w.alts in the same order, as many as fit. The F-V and E-E loops take their features
+// as the table that drops the repeats leaves them (in the near set's order): this gives the atoms
+// and alternatives the order that taking the features sorted gave them, without sorting the
+// features (some hundreds a tick) first. (Of more than kMaxAtoms alternatives, the first made
+// are kept; the step keeps kMaxAlts.)
 void order_by_feature(Workspace& w, int first, bool alts) {
     const int n = w.atom_count - first;
     int* const order = w.order_index;  // the atoms' old places, in their new order
