@@ -1328,6 +1328,15 @@ void add_atom(Workspace& w, const Atom& a) {
     else w.gather_full = true;
 }
 
+// add_atom for gather's F-V and E-E loops: the atom notes the object feature it was made for
+// (order_by_feature). Whether it fit.
+bool add_feature_atom(Workspace& w, const Atom& a, uint64_t feature) {
+    if (w.atom_count < kMaxAtoms) w.atom_feature[w.atom_count] = feature;
+    const int before = w.atom_count;
+    add_atom(w, a);
+    return w.atom_count > before;
+}
+
 void add_alt(Workspace& w, int replace, const Atom& a) {
     // An alternative to an atom that did not fit has nothing to replace.
     if (replace < w.atom_count && w.alt_count < kMaxAlts) w.alts[w.alt_count++] = Alt{replace, a};
@@ -2138,10 +2147,8 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                     continue;
             }
             const int index = w.atom_count;
-            add_atom(w, at);
             // An alternative to an atom that did not fit has nothing to replace.
-            if (index == w.atom_count) continue;
-            w.atom_feature[index] = w.overts[i];
+            if (!add_feature_atom(w, at, w.overts[i])) continue;
             for (int j = 0; j < listed; ++j) {
                 const int f = from_memo ? int(memo.faces[j]) : f0 + j;
                 if (f == best) continue;
@@ -2289,8 +2296,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             at.object_edge = feature_id(w.oedges[i]);
             at.tool_edge = static_cast<uint32_t>(te);
             at.sign = pair.sign;
-            if (w.atom_count < kMaxAtoms) w.atom_feature[w.atom_count] = w.oedges[i];
-            add_atom(w, at);
+            add_feature_atom(w, at, w.oedges[i]);
         }
     }
     order_by_feature(w, ee_first, false);
