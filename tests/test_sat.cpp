@@ -181,6 +181,54 @@ TEST(FastSat, FourAtATimeGivesTheOneAtATimeAnswerToTheBit) {
     four_at_a_time_match(make_probe_tip_collision(ProbeKind::Nabers), 1e-3, 2000, 23);
 }
 
+// The test stopped at the first axis whose gap reaches `enough` says what the whole test says
+// about reaching it: under `enough`, the whole test's answer to the bit; at or over it, a gap of
+// at least `enough` along the axis it gives (a real gap there) and no more than the separation.
+// Over thresholds round the separation (just under, at, just over it, and far from it), for
+// answers of every kind, on each probe tip and on a box.
+void stopped_test_agrees(const TriMesh& tool_mesh, double scale, int trials, unsigned seed) {
+    PlacedTool pt(tool_mesh);
+    ASSERT_TRUE(pt.mb.model) << pt.mb.error;
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int under = 0, stopped = 0, early = 0;
+    for (int t = 0; t < trials; ++t) {
+        place_at_random(pt, rng, u, scale);
+        const ConvexView view = pt.view(true);
+        Vec3 a, b, d;
+        triangle_near_vertex(pt, rng, u, scale, a, b, d);
+        const SatResult full = separate_convex_triangle(view, a, b, d);
+        const double s = full.separation;
+        const double ulp = std::nextafter(s, 1e300) - s;
+        for (const double enough : {s - 1e-4 * scale, s - ulp, s, s + ulp, s + 1e-4 * scale, -1e-3 * scale, 0.0}) {
+            const SatResult r = separate_convex_triangle_until(view, a, b, d, enough);
+            if (s < enough) {
+                ++under;
+                ASSERT_EQ(std::memcmp(&r.separation, &full.separation, sizeof(double)), 0) << "trial " << t;
+                ASSERT_EQ(std::memcmp(&r.axis, &full.axis, sizeof(Vec3)), 0) << "trial " << t;
+                ASSERT_EQ(r.kind, full.kind) << "trial " << t;
+                ASSERT_EQ(r.index, full.index) << "trial " << t;
+            } else {
+                ++stopped;
+                ASSERT_GE(r.separation, enough) << "trial " << t;
+                ASSERT_LE(r.separation, s) << "trial " << t;
+                EXPECT_NEAR(gap_along_axis(view, r.axis, a, b, d), r.separation, 1e-12 * scale) << "trial " << t;
+                early += r.separation < s;
+            }
+        }
+    }
+    // Both answers come up often, and the test often stops before the best axis.
+    EXPECT_GT(under, trials);
+    EXPECT_GT(stopped, trials);
+    EXPECT_GT(early, trials / 4);
+}
+
+TEST(FastSat, StoppedAtEnoughSaysWhatTheWholeTestSays) {
+    stopped_test_agrees(make_box(Vec3(1e-3, 2e-3, 0.5e-3)), 2e-3, 1500, 31);
+    stopped_test_agrees(make_probe_tip_collision(ProbeKind::Williams), 1e-3, 1500, 32);
+    stopped_test_agrees(make_probe_tip_collision(ProbeKind::Nabers), 1e-3, 1500, 33);
+}
+
 // Placing the tool four vertices and four face planes at a time gives glm's q * v + p and
 // n . p + offset to the bit, for every probe tip and odd counts (the last ones one at a time), at
 // random poses.

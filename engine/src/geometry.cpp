@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 
 namespace sulcus {
 
@@ -131,9 +132,16 @@ bool vertex_deep_inside(const ConvexView& poly, const Vec3& a, const Vec3& b, co
 
 SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c,
                                    bool four_at_a_time) {
+    return separate_convex_triangle_until(poly, a, b, c, std::numeric_limits<double>::infinity(), four_at_a_time);
+}
+
+SatResult separate_convex_triangle_until(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c,
+                                         double enough, bool four_at_a_time) {
     (void)four_at_a_time;  // without AVX2, one at a time
     SatResult best;
     best.separation = -1e300;
+    // Whether an axis's gap has reached `enough`: the test stops there.
+    auto reached = [&] { return best.separation >= enough; };
     auto keep = [&](double s, double sign, const Vec3& axis, int kind, int index) {
         if (s > best.separation) {
             best.separation = s;
@@ -155,6 +163,7 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
         double pmin, pmax;
         if (!(four_at_a_time && extent_four_at_a_time(poly, axis, pmin, pmax))) extent_along(poly, axis, pmin, pmax);
         keep(extent_gap(pmin, pmax, axis, a, b, c, sign), sign, axis, 0, 0);
+        if (reached()) return best;
     }
     const bool fast = poly.depths && poly.edge_normals && poly.rotation;
     int f = 0;
@@ -177,12 +186,14 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
             alignas(32) double s[4];
             _mm256_store_pd(s, lanes_max(pos, neg));
             for (int j = 0; j < 4; ++j) keep(s[j], (positive >> j & 1) ? 1.0 : -1.0, poly.normals[f + j], 1, f + j);
+            if (reached()) return best;
         }
     }
 #endif
     for (; f < poly.face_count; ++f) {
         if (!fast) {
             consider(poly.normals[f], 1, f);
+            if (reached()) return best;
             continue;
         }
         // The polytope spans [offset - depth, offset] along its own face normal.
@@ -190,6 +201,7 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
         double sign = 1.0;
         const double s = extent_gap(poly.offsets[f] - poly.depths[f], poly.offsets[f], n, a, b, c, sign);
         keep(s, sign, n, 1, f);
+        if (reached()) return best;
     }
     const Vec3 te[3] = {b - a, c - b, a - c};
     // Edge pairs: only those that form a face of the Minkowski difference can be the separating
@@ -227,7 +239,10 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
     };
     if (!(fast && tl > 0.0)) {
         for (int k = 0; k < 3; ++k)
-            for (int e = 0; e < poly.edge_count; ++e) edge_pair(k, e, Vec3(0.0));
+            for (int e = 0; e < poly.edge_count; ++e) {
+                edge_pair(k, e, Vec3(0.0));
+                if (reached()) return best;
+            }
         return best;
     }
     // The arcs cross where the edge's two normals are not both on one side of the plane normal to
@@ -294,6 +309,7 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
                 const double be = glm::dot(poly.edge_normals[e][1], e_local[k]);
                 if ((al > tol[k] && be > tol[k]) || (al < -tol[k] && be < -tol[k])) continue;
                 arcs_cross(k, e, al, be, out_length);
+                if (reached()) return best;
             }
             continue;
         }
@@ -309,12 +325,18 @@ SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const 
                 const __m256i m = _mm256_load_si256(reinterpret_cast<const __m256i*>(shared + e));
                 uint32_t crossing =
                     uint32_t(_mm256_movemask_epi8(_mm256_cmpeq_epi8(_mm256_and_si256(m, side_k), zero)));
-                for (; crossing != 0; crossing &= crossing - 1) open(e + __builtin_ctz(crossing));
+                for (; crossing != 0; crossing &= crossing - 1) {
+                    open(e + __builtin_ctz(crossing));
+                    if (reached()) return best;
+                }
             }
         }
 #endif
         for (; e < poly.edge_count; ++e)
-            if (!(shared[e] >> 2 * k & 3)) open(e);
+            if (!(shared[e] >> 2 * k & 3)) {
+                open(e);
+                if (reached()) return best;
+            }
     }
     return best;
 }

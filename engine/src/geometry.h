@@ -395,6 +395,12 @@ struct SatResult {
 // operations in its order: the same answer to the bit as `four_at_a_time = false`.
 SatResult separate_convex_triangle(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c,
                                    bool four_at_a_time = true);
+// The same test, stopped at the first axis (in the test's order) whose gap reaches `enough`: the
+// answer is then that axis and its gap (at least `enough`, not always the largest); where none
+// does, the whole test's answer. For a caller that only asks whether the separation reaches
+// `enough`, which the answer says as the whole test's would.
+SatResult separate_convex_triangle_until(const ConvexView& poly, const Vec3& a, const Vec3& b, const Vec3& c,
+                                         double enough, bool four_at_a_time = true);
 // The gap between the polytope and triangle (a, b, c) along unit axis n, the larger of its two
 // orientations (< 0: overlap along n). No more than their separation where they overlap (the
 // least overlap over all axes), nor than their distance where they are apart.

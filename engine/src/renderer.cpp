@@ -2621,12 +2621,16 @@ double separation_witness(const Model& model, const ConvexView& view, const Near
     return std::max(normal, gap_along_axis(view, memo.axis, a, b, c, extremes));
 }
 
-// The separation by the separating-axis test, its axis kept for the pair's next witness.
-double separation_test(const Model& model, const ConvexView& view, const NearTri& nt, Workspace& w) {
+// The separation by the separating-axis test, its axis kept for the pair's next witness; the test
+// stops at the first axis whose gap reaches `floor` (separate_convex_triangle_until), so that what
+// is returned is the separation where it is under the floor, else a gap of at least the floor.
+// (Most pairs the guard tests are separated by more than the floor: one of the piece's faces
+// says so, and the rest of the test, two thirds of its cost for the edge pairs, is not needed.)
+double separation_test(const Model& model, const ConvexView& view, const NearTri& nt, double floor, Workspace& w) {
     const ModelObject& obj = model.objects[nt.object];
     const auto& t = obj.mesh.triangles[nt.tri];
-    const SatResult sat =
-        separate_convex_triangle(view, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]], obj.mesh.vertices[t[2]]);
+    const SatResult sat = separate_convex_triangle_until(view, obj.mesh.vertices[t[0]], obj.mesh.vertices[t[1]],
+                                                         obj.mesh.vertices[t[2]], floor);
     const uint64_t key = plane_key(nt);
     Workspace::SatMemo& memo = sat_memo_slot(key, w);
     memo.key = key;
@@ -2914,11 +2918,13 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
             if (glm::dot(dir, dir) > 0.0 &&
                 convex_triangle_separation(moved, t0, t1, t2, floor, -1e300, &dir, sx, 0).separation >= floor)
                 continue;
-            // A compliant triangle already under the floor at the start (by its lower bound) is
-            // mostly under it here too, which only the separating-axis test shows: that at once,
-            // without the search from the normal (its answer, exact, settles the triangle either way).
+            // A compliant triangle already under the floor at the start (by its lower bound) goes to
+            // the separating-axis test at once, without the search from the normal: the test stops
+            // at the first axis whose gap reaches the floor (over the tissue session, 2,000 of its
+            // 2,029 such tests; one of the piece's faces mostly says so), and where none does its
+            // answer is exact and settles the triangle.
             if (compliant && w.near[i].separation_m < floor) {
-                if (separation_test(model, moved, w.near[i], w) < floor) missed_tris[missed++] = i;
+                if (separation_test(model, moved, w.near[i], floor, w) < floor) missed_tris[missed++] = i;
                 continue;
             }
             if (convex_triangle_separation(moved, t0, t1, t2, floor, -1e300, &obj.topology.triangle_normals[w.near[i].tri],
@@ -2926,7 +2932,7 @@ CandidateResult solve_candidate(const Model& model, const Pose& base, const Mat3
                     .separation >= floor)
                 continue;
             if ((compliant ? witness : separation_witness(model, moved, w.near[i], floor, w)) < floor &&
-                separation_test(model, moved, w.near[i], w) < floor) {
+                separation_test(model, moved, w.near[i], floor, w) < floor) {
                 missed_tris[missed++] = i;
             }
         }
