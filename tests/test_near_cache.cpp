@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <random>
 #include <string>
@@ -198,7 +199,11 @@ TEST(NearCache, TissueSetsAreGatheredAheadOneATick) {
 TEST(NearCache, ASessionRunAgainDoesTheSameWork) {
     const cli::BenchScene b = load("quadrant_two_regions");
     ASSERT_GT(b.ticks.size(), size_t(5000));
-    const auto model = model_for(b, true);
+    // The work ahead of need placed by the ticks' counts of work alone, not by the clock
+    // (RendererSettings::defer_after_us).
+    RendererSettings settings;
+    settings.defer_after_us = std::numeric_limits<double>::infinity();
+    const auto model = test::bench_model(b, settings);
     struct Work {
         int tested, gathers, quiet, near, edge_queries, face_searches;
         bool operator==(const Work&) const = default;
@@ -228,6 +233,47 @@ TEST(NearCache, ASessionRunAgainDoesTheSameWork) {
     EXPECT_GT(quiet, 100000);
     EXPECT_GT(edges, 1000);
     EXPECT_GT(faces, 1000);
+}
+
+// When the work ahead of need is done (a slice of the next superset, a tissue set gathered anew
+// before the tool leaves it) changes no answer: the tissue session with that work waiting at every
+// tick it may (State::defer = 1, as after a tick longer than RendererSettings::defer_after_us)
+// and with it never waiting (0) gives the same pose, force, torque and status to the bit at every
+// tick, though the two do other work at many ticks.
+TEST(NearCache, WorkAheadOfNeedWaitingChangesNoAnswer) {
+    const cli::BenchScene b = load("quadrant_two_regions");
+    ASSERT_GT(b.ticks.size(), size_t(5000));
+    const auto model = model_for(b, true);
+    // One session after the other on this thread (each carries its caches along its own ticks).
+    auto session = [&](int defer) {
+        std::vector<StepResult> out;
+        State state = make_state(b.ticks.front());
+        for (size_t i = 0; i < b.ticks.size(); ++i) {
+            state.defer = defer;
+            out.push_back(step(*model, state, b.ticks[i]));
+            EXPECT_EQ(state.defer, -1) << "tick " << i;  // for one step only
+        }
+        return out;
+    };
+    const std::vector<StepResult> waits = session(1), never = session(0);
+    int other_work = 0, deferred = 0, in_contact = 0;
+    for (size_t i = 0; i < b.ticks.size(); ++i) {
+        const StepResult &a = waits[i], &c = never[i];
+        ASSERT_EQ(a.status, c.status) << "tick " << i;
+        ASSERT_EQ(std::memcmp(&a.graphic, &c.graphic, sizeof(Pose)), 0) << "tick " << i;
+        ASSERT_EQ(std::memcmp(&a.force_N, &c.force_N, sizeof(Vec3)), 0) << "tick " << i;
+        ASSERT_EQ(std::memcmp(&a.torque_Nm, &c.torque_Nm, sizeof(Vec3)), 0) << "tick " << i;
+        EXPECT_FALSE(c.stats.deferred) << "tick " << i;
+        deferred += a.stats.deferred;
+        in_contact += a.status == StepStatus::Contact;
+        other_work += a.stats.triangles_tested != c.stats.triangles_tested ||
+                      a.stats.compliant_gathers != c.stats.compliant_gathers ||
+                      a.stats.quiet_triangles != c.stats.quiet_triangles;
+    }
+    EXPECT_EQ(deferred, int(b.ticks.size()));
+    EXPECT_GT(in_contact, 4000);
+    // The placement did change: the work differs at many ticks.
+    EXPECT_GT(other_work, 500);
 }
 
 // Most gingiva triangles near the probe are near its long faces, not its vertices: gather's search

@@ -3593,6 +3593,9 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     const auto t_start = Clock::now();
     Workspace& w = workspace();
     const RendererSettings& S = model.settings;
+    // The caller's word on this tick's work ahead of need, for this step only.
+    const int defer = state.defer;
+    state.defer = -1;
     StepResult res;
     w.tests = 0;
     w.detect_tests = 0;
@@ -3842,12 +3845,16 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
         const bool burst = w.compliant_gathers > 0 || w.bounds_measured >= kHeavyBoundsMeasured ||
                            w.edge_queries >= kHeavyEdgeQueries || res.stats.relinearizations > 1 ||
                            res.stats.candidates > 2;
-        const Load load = res.stats.passes > 0 || res.stats.released    ? Load::Passes
-                          : w.detect_tests >= kHeavyDetectTests || burst ? Load::Heavy
-                          : w.tests <= kLightTests                       ? Load::Light
-                                                                         : Load::Usual;
+        // A tick that has already taken longer than defer_after_us (or that the caller says
+        // to treat so) counts as heavy: the work waits while there is room.
+        const bool deferred = defer >= 0 ? defer == 1 : micros(t_start, t0) > S.defer_after_us;
+        res.stats.deferred = deferred;
+        const Load load = res.stats.passes > 0 || res.stats.released                ? Load::Passes
+                          : w.detect_tests >= kHeavyDetectTests || burst || deferred ? Load::Heavy
+                          : w.tests <= kLightTests                                   ? Load::Light
+                                                                                     : Load::Usual;
         const bool sliced = tend_superset(model, cache, load);
-        if (model.any_compliant) tend_compliant_sets(model, w, sliced || burst);
+        if (model.any_compliant) tend_compliant_sets(model, w, sliced || burst || deferred);
         stage_detect += micros(t0, Clock::now());
     }
     bool base_stands = false;

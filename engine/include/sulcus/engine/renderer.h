@@ -72,6 +72,16 @@ struct RendererSettings {
     // bounds of (StepStats::quiet_featured), using nothing it finds of such a vertex: a check of
     // the cache, at a cost.
     bool audit_quiet_triangles = false;
+    // With the near cache, the work a tick does ahead of need at its end (a slice of the next
+    // superset of a piece's triangles, a tissue set gathered anew before the tool leaves it) waits
+    // for a later tick when this one has already taken longer than this (microseconds, measured
+    // on the step's clock), for as long as the room left allows: so that it seldom lands on a tick
+    // that is heavy already (docs/performance.md). Changes when that work is done, never the
+    // step's answers, which are the same to the bit whatever the clock says; the work of each
+    // tick (StepStats' counts) then depends on the machine. Infinite: placed by the tick's counts
+    // of work alone, the same on every run (headless replays, tests). A caller can also decide it
+    // for each tick (State::defer), as the bench's later runs follow its first run's placement.
+    double defer_after_us = 70.0;
     // Leave out a candidate that swaps an atom holding nothing in the default set's answer for
     // its alternative (that answer the first QP from the step's start): it cannot have less
     // energy (docs/renderer.md, solve). Off: every candidate is solved. Changes the step's cost,
@@ -417,6 +427,9 @@ struct StepStats {
     // for among all the piece's faces, not among those a memo kept.
     int edge_queries = 0;
     int face_searches = 0;
+    // Whether the work ahead of need waited for a later tick because this one had taken longer
+    // than RendererSettings::defer_after_us (or State::defer said so).
+    bool deferred = false;
     int atoms_gathered = 0;     // constraint atoms found within reach (gather)
     int candidates = 0;         // candidate principal-contact sets solved (gather/solve)
     int atoms = 0;              // constraint atoms in the chosen candidate
@@ -505,12 +518,18 @@ struct State {
     // session's own ticks, so a session stepped again from its start repeats itself exactly.
     uint64_t session = 0;
     uint64_t ticks = 0;
+    // For the next step only, then back to -1: whether its work ahead of need waits as after a
+    // tick longer than RendererSettings::defer_after_us (1), or not (0), instead of by its clock
+    // (-1). Set from StepStats::deferred, it repeats another run's placement of that work.
+    int defer = -1;
 };
 
 // Starts a state with the graphic tool at `pose` (which must not penetrate).
 State make_state(const Pose& pose);
 
-// One servo tick. Deterministic; no heap allocation, lock or I/O after the first call on a thread.
+// One servo tick. Deterministic in its answers (and in its work too with
+// RendererSettings::defer_after_us infinite, or State::defer set); no heap allocation, lock or
+// I/O after the first call on a thread.
 StepResult step(const Model& model, State& state, const Pose& haptic_pose);
 
 // The 6-vector of eq. 4 in world frame: force K_t (p_g - p_h), torque K_r log(R_g R_h^-1).
