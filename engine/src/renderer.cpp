@@ -749,9 +749,9 @@ PieceNearCache* piece_superset(const Model& model, NearCache& c, size_t k, const
 }
 
 // How much a tick did before the end-of-tick slice (tend_superset): another pass or a release;
-// many distance tests in detect or a burst of other work (a tissue set gathered anew, many of its
-// bounds measured, many edge memos made anew, a second linearization, more than two candidates);
-// few triangles tested in all; neither.
+// many distance tests in detect, a burst of other work (a tissue set gathered anew, many of its
+// bounds measured, many edge memos made anew, a second linearization, more than two candidates)
+// or more time than RendererSettings::defer_after_us; few triangles tested in all; neither.
 enum class Load { Passes, Heavy, Light, Usual };
 
 // At the end of a tick: a slice of the superset in progress, or its install once complete (true
