@@ -2625,7 +2625,7 @@ double separation_witness(const Model& model, const ConvexView& view, const Near
 // stops at the first axis whose gap reaches `floor` (separate_convex_triangle_until), so that what
 // is returned is the separation where it is under the floor, else a gap of at least the floor.
 // (Most pairs the guard tests are separated by more than the floor: one of the piece's faces
-// says so, and the rest of the test, two thirds of its cost for the edge pairs, is not needed.)
+// says so, and the rest of the test, most of its cost (the edge pairs), is not needed.)
 double separation_test(const Model& model, const ConvexView& view, const NearTri& nt, double floor, Workspace& w) {
     const ModelObject& obj = model.objects[nt.object];
     const auto& t = obj.mesh.triangles[nt.tri];
