@@ -845,8 +845,7 @@ double compliant_room_left(const Workspace::CompliantSet& c) {
 }
 
 // At the end of a tick: the compliant set of this model that has the least room left, once that
-// is under kCompliantRefresh of Workspace::kCompliantRoom (kCompliantRefreshBusy after a `busy`
-// tick: one that had a superset's slice or a burst of work), gathered anew about its last query box.
+// is under kCompliantRefresh of Workspace::kCompliantRoom, gathered anew about its last query box.
 // The tool's pieces move together, and their sets left their boxes at the same tick (five walks
 // of the tissue's hierarchy and some thousand triangles measured in one tick); one a tick, ahead
 // of need, spreads them. What a query gets does not change: a set whose box holds it gives a fresh
@@ -854,21 +853,27 @@ double compliant_room_left(const Workspace::CompliantSet& c) {
 // bounds they carry were measured at other times, and every use takes them as bounds.
 constexpr double kCompliantRefresh = 0.5;
 // A gathering anew costs some 125 K instructions and has the set's bounds measured at the next
-// tick (some 700 of them): a busy tick leaves it to a later one until the room left falls under
-// this share of the room. The room lasts several ticks of a fast stroke, so the costs seldom meet.
+// tick (some 700 of them). After a `busy` tick (a superset's slice, a burst of work, or a long
+// one by the clock) the set waits for a later tick while it is the only one due and has this
+// share of the room left; with two or more due, waiting one a tick in a spell of long ticks let
+// three pieces outrun their sets at one tick. A tick where a piece has already outrun its set
+// gathers none ahead.
 constexpr double kCompliantRefreshBusy = 0.25;
 void tend_compliant_sets(const Model& model, Workspace& w, bool busy) {
+    if (w.compliant_gathers > 0) return;
     Workspace::CompliantSet* most = nullptr;
-    double least = (busy ? kCompliantRefreshBusy : kCompliantRefresh) * Workspace::kCompliantRoom;
+    double least = kCompliantRefresh * Workspace::kCompliantRoom;
+    int due = 0;
     for (Workspace::CompliantSet& c : w.compliant_sets) {
         if (c.owner != w.owner || c.object >= model.objects.size()) continue;
         const double left = compliant_room_left(c);
+        if (left < kCompliantRefresh * Workspace::kCompliantRoom) ++due;
         if (left < least) {
             least = left;
             most = &c;
         }
     }
-    if (!most) return;
+    if (!most || (busy && due < 2 && least >= kCompliantRefreshBusy * Workspace::kCompliantRoom)) return;
     Workspace::CompliantSet& c = *most;
     ++w.compliant_gathers;
     if (!gather_compliant_set(model.objects[c.object], Aabb(c.query), true, c, w)) {
