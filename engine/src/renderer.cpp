@@ -265,6 +265,7 @@ struct Workspace {
     int bounds_measured = 0;    // tissue triangles' bounds measured in this tick (gather_in_box)
     int quiet_triangles = 0;    // StepStats::quiet_triangles
     int edge_queries = 0;       // StepStats::edge_queries
+    int edge_memos_ahead = 0;   // StepStats::edge_memos_ahead
     int face_searches = 0;      // StepStats::face_searches
     int quiet_featured = 0;     // StepStats::quiet_featured
     int detect_tests = 0;  // detect's distance tests of this tick (judge_near)
@@ -378,6 +379,18 @@ struct Workspace {
     };
     static constexpr int kEdgeMemoBits = 12;
     EdgeHitMemo edge_memo[1 << kEdgeMemoBits];
+    // The memos the last gather_atoms call used that had moved past kEdgeRenewShare of their
+    // slack, with what a query at that call would take (the edge's ends in the piece's frame and
+    // its `far`): tend_edge_memos makes some of them anew at the tick's end, ahead of need.
+    struct EdgeDue {
+        uint64_t key;
+        Vec3 at[2];
+        double far;
+        double share;  // the larger end's motion over the memo's slack
+    };
+    static constexpr int kEdgeDue = 256;
+    EdgeDue edge_due[kEdgeDue];
+    int edge_due_count = 0;
     uint64_t gather_clock = 0;  // counts gather_atoms' calls
     // The most room a memo's hits reach past `far` (m): in the tissue, where an edge's reach is the
     // tool's depth in it, a room of all of that holds more hits than a memo keeps.
@@ -710,6 +723,14 @@ constexpr int kLightTests = 40;
 // fast stroke, some 50-90 at once).
 constexpr int kHeavyBoundsMeasured = 256;
 constexpr int kHeavyEdgeQueries = 32;
+// Edge memos made at one tick run out at one tick (some 50-90 of a crown's or the tissue's edges
+// in a stroke). One that a tick used after moving past this share of its slack is made anew at
+// the tick's end, ahead of need (tend_edge_memos): up to kEdgeRenewPerTick a tick, and on a heavy
+// one only those past kEdgeRenewUrgent, up to kEdgeRenewPerHeavyTick.
+constexpr double kEdgeRenewShare = 0.5;
+constexpr double kEdgeRenewUrgent = 0.75;
+constexpr int kEdgeRenewPerTick = 24;
+constexpr int kEdgeRenewPerHeavyTick = 8;
 
 // Piece k's superset for a tick of reach `reach` at pose `at` (capsules `axis`): the current one
 // while it holds, the one in progress once complete, and a new one gathered at once when neither
@@ -746,6 +767,29 @@ PieceNearCache* piece_superset(const Model& model, NearCache& c, size_t k, const
     }
     install_superset(model, c);
     return &pc;
+}
+
+// An edge memo's hits made anew: the tool edges of `piece` (relative to its first) within
+// `within` of the object edge l0-l1 in the piece's frame, in their order, into `out`; the count.
+int edge_hits_within(const ModelTool& tool, const ToolPiece& piece, const Vec3& l0, const Vec3& l1, double within,
+                     uint16_t* out) {
+    const Vec3 d_l = l1 - l0;
+    const double e_l = glm::dot(d_l, d_l);
+    Aabb box;
+    box.grow(l0);
+    box.grow(l1);
+    box.inflate(within);
+    int hits = 0;
+    piece.edge_bvh.query(box, [&](uint32_t e) {
+        const ModelTool::EdgeLine& line = tool.edge_lines[piece.edge_begin + e];
+        double s_, t_;
+        closest_segment_params(line.along, d_l, line.from - l0, line.length2, e_l, s_, t_);
+        const Vec3 gap = (line.from + s_ * line.along) - (l0 + t_ * d_l);
+        if (!root_exceeds(glm::dot(gap, gap), within)) out[hits++] = uint16_t(e);
+        return true;
+    });
+    std::sort(out, out + hits);
+    return hits;
 }
 
 // How much a tick did before the end-of-tick slice (tend_superset): another pass or a release;
@@ -880,6 +924,43 @@ void tend_compliant_sets(const Model& model, Workspace& w, bool busy) {
         c.owner = 0;
         c.used = 0;
     }
+}
+
+// At the end of a tick: some of the edge memos the tick's last gather found past kEdgeRenewShare
+// of their slack made anew where they were then (Workspace::EdgeDue), the furthest gone first:
+// none on a tick with another pass or a release. A memo made so is the one that gather would have
+// made at that call, so no answer changes; it only runs out later, apart from the others made
+// with it.
+void tend_edge_memos(const Model& model, Workspace& w, Load load) {
+    if (load == Load::Passes || w.edge_due_count == 0 || !model.settings.edge_memos_ahead) return;
+    const bool heavy = load == Load::Heavy;
+    int budget = heavy ? kEdgeRenewPerHeavyTick : kEdgeRenewPerTick;
+    for (int round = 0; round < 2 && budget > 0; ++round) {
+        const double least = round == 0 ? kEdgeRenewUrgent : heavy ? 2.0 : kEdgeRenewShare;
+        for (int i = 0; i < w.edge_due_count && budget > 0; ++i) {
+            Workspace::EdgeDue& d = w.edge_due[i];
+            if (!(d.share >= least)) continue;
+            d.share = -1.0;
+            --budget;
+            const uint32_t slot = hash_slot(d.key, Workspace::kEdgeMemoBits);
+            Workspace::EdgeHitMemo* memo = nullptr;
+            for (Workspace::EdgeHitMemo* m : {&w.edge_memo[slot], &w.edge_memo[slot ^ 1u]})
+                if (m->key == d.key && m->owner == w.owner) memo = m;
+            if (!memo) continue;
+            const ToolPiece& piece = model.tool.pieces[feature_piece(d.key - 1)];
+            ++w.edge_queries;
+            ++w.edge_memos_ahead;
+            const int hits = edge_hits_within(model.tool, piece, d.at[0], d.at[1],
+                                              d.far + Workspace::edge_memo_room(d.far) + 1e-9, w.edge_hits);
+            if (hits > Workspace::kEdgeMemoHits) continue;
+            memo->at[0] = d.at[0];
+            memo->at[1] = d.at[1];
+            memo->far = d.far;
+            memo->count = hits;
+            std::copy(w.edge_hits, w.edge_hits + hits, memo->hits);
+        }
+    }
+    w.edge_due_count = 0;
 }
 
 // The triangles of `obj` whose boxes meet box `b`, for piece `pk` (a compliant object's, or any
@@ -1777,6 +1858,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
     // of the piece's vertices since the set's last gather, and the rise of the tests' bounds
     // (`far` by twice the reach's rise and once the depth's, `reach` and `back` by less).
     const uint64_t call = ++w.gather_clock;
+    w.edge_due_count = 0;
     auto add_drift = [&](Workspace::CompliantSet& c, uint16_t o) {
         if (c.drift_call == call) return;
         const double depth = inside_reach(model, soft, o, 0.0);
@@ -2211,23 +2293,14 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             memo->used = w.gather_clock;
             edge_hits = memo->hits;
             hits = memo->count;
+            const double moved2 = std::max(glm::dot(m0, m0), glm::dot(m1, m1));
+            if (moved2 > kEdgeRenewShare * kEdgeRenewShare * slack * slack && w.edge_due_count < Workspace::kEdgeDue)
+                w.edge_due[w.edge_due_count++] =
+                    Workspace::EdgeDue{memo_key, {l0, l1}, far, slack > 0.0 ? std::sqrt(moved2) / slack : 1.0};
         } else {
             ++w.edge_queries;
             const double room = memo_on ? Workspace::edge_memo_room(far) : 0.0;
-            const double within = far + room + 1e-9;
-            Aabb box;
-            box.grow(l0);
-            box.grow(l1);
-            box.inflate(within);
-            piece.edge_bvh.query(box, [&](uint32_t e) {
-                const ModelTool::EdgeLine& line = tool.edge_lines[piece.edge_begin + e];
-                double s_, t_;
-                closest_segment_params(line.along, d_l, line.from - l0, line.length2, e_l, s_, t_);
-                const Vec3 gap = (line.from + s_ * line.along) - (l0 + t_ * d_l);
-                if (!root_exceeds(glm::dot(gap, gap), within)) w.edge_hits[hits++] = uint16_t(e);
-                return true;
-            });
-            std::sort(w.edge_hits, w.edge_hits + hits);
+            hits = edge_hits_within(tool, piece, l0, l1, far + room + 1e-9, w.edge_hits);
             if (memo_on && hits <= Workspace::kEdgeMemoHits) {
                 // Its own slot again, else the one used longer ago.
                 if (!memo) memo = last_use(*pair[0], w.owner) <= last_use(*pair[1], w.owner) ? pair[0] : pair[1];
@@ -3608,6 +3681,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     w.bounds_measured = 0;
     w.quiet_triangles = 0;
     w.edge_queries = 0;
+    w.edge_memos_ahead = 0;
     w.face_searches = 0;
     w.quiet_featured = 0;
 
@@ -3860,6 +3934,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
                                                                                      : Load::Usual;
         const bool sliced = tend_superset(model, cache, load);
         if (model.any_compliant) tend_compliant_sets(model, w, sliced || burst || deferred);
+        tend_edge_memos(model, w, sliced && load != Load::Light ? Load::Heavy : load);
         stage_detect += micros(t0, Clock::now());
     }
     bool base_stands = false;
@@ -3969,6 +4044,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     res.stats.compliant_gathers = w.compliant_gathers;
     res.stats.quiet_triangles = w.quiet_triangles;
     res.stats.edge_queries = w.edge_queries;
+    res.stats.edge_memos_ahead = w.edge_memos_ahead;
     res.stats.face_searches = w.face_searches;
     res.stats.quiet_featured = w.quiet_featured;
     return res;

@@ -22,7 +22,8 @@ import sys
 import tempfile
 
 TIMES = {'step_us', 'detect_us', 'gather_us', 'solve_us', 'select_us', 'force_us', 'least_step_us'}
-WORK = {'triangles_tested', 'compliant_gathers', 'quiet_triangles', 'edge_queries', 'face_searches', 'deferred'}
+WORK = {'triangles_tested', 'compliant_gathers', 'quiet_triangles', 'edge_queries', 'edge_memos_ahead', 'face_searches',
+        'deferred'}
 
 
 def other_answers(x, y):

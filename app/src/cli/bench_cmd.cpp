@@ -112,7 +112,7 @@ bool write_ticks_csv(const std::string& path, const BenchRun& run) {
     std::fprintf(f, "tick,status,step_us,detect_us,gather_us,solve_us,select_us,force_us,triangles_near,"
                     "triangles_tested,atoms_gathered,candidates,atoms,qp_solves,qp_iterations,relinearizations,"
                     "passes,rescues,released,gather_truncated,regions,soft_depth_m,allocations,px_m,py_m,pz_m,qw,qx,qy,qz,"
-                    "fx_N,fy_N,fz_N,compliant_gathers,quiet_triangles,edge_queries,face_searches,deferred,least_step_us\n");
+                    "fx_N,fy_N,fz_N,compliant_gathers,quiet_triangles,edge_queries,edge_memos_ahead,face_searches,deferred,least_step_us\n");
     for (size_t i = 0; i < run.ticks.size(); ++i) {
         const BenchTick& t = run.ticks[i];
         const StepStats& s = t.stats;
@@ -121,13 +121,14 @@ bool write_ticks_csv(const std::string& path, const BenchRun& run) {
         const Quat& q = t.graphic.orientation;
         std::fprintf(f,
                      "%zu,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%.9g,%ld,"
-                     "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d,%d,%d,%d,%.3f\n",
+                     "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d,%d,%d,%d,%d,%.3f\n",
                      i, to_string(t.status), t.step_us, s.times.detect_us, s.times.gather_us, s.times.solve_us,
                      s.times.select_us, s.times.force_us, s.triangles_near, s.triangles_tested, s.atoms_gathered,
                      s.candidates, s.atoms, s.qp_solves, s.qp_iterations, s.relinearizations, s.passes, s.rescues,
                      int(s.released), int(s.gather_truncated), s.regions, s.soft_depth_m, t.allocations, p.x, p.y, p.z,
                      q.w, q.x, q.y, q.z, t.force_N.x, t.force_N.y, t.force_N.z, s.compliant_gathers,
-                     s.quiet_triangles, s.edge_queries, s.face_searches, int(s.deferred), t.least_step_us);
+                     s.quiet_triangles, s.edge_queries, s.edge_memos_ahead, s.face_searches, int(s.deferred),
+                     t.least_step_us);
     }
     return std::fclose(f) == 0;
 }

@@ -82,6 +82,11 @@ struct RendererSettings {
     // of work alone, the same on every run (headless replays, tests). A caller can also decide it
     // for each tick (State::defer), as the bench's later runs follow its first run's placement.
     double defer_after_us = 70.0;
+    // With the near cache, an edge memo (the tool edges near an object edge) that a tick used
+    // after it had moved past half its room is made anew at the tick's end, a few a tick, rather
+    // than all of those made together running out at one later tick. Changes when that work is
+    // done, never the step's answers (StepStats::edge_memos_ahead).
+    bool edge_memos_ahead = true;
     // Leave out a candidate that swaps an atom holding nothing in the default set's answer for
     // its alternative (that answer the first QP from the step's start): it cannot have less
     // energy (docs/renderer.md, solve). Off: every candidate is solved. Changes the step's cost,
@@ -427,6 +432,9 @@ struct StepStats {
     // for among all the piece's faces, not among those a memo kept.
     int edge_queries = 0;
     int face_searches = 0;
+    // Of edge_queries, the memos made anew ahead of need at the tick's end
+    // (RendererSettings::edge_memos_ahead).
+    int edge_memos_ahead = 0;
     // Whether the work ahead of need waited for a later tick because this one had taken longer
     // than RendererSettings::defer_after_us (or State::defer said so).
     bool deferred = false;
