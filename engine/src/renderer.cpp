@@ -927,8 +927,8 @@ void tend_compliant_sets(const Model& model, Workspace& w, bool busy) {
 }
 
 // At the end of a tick: some of the edge memos the tick's last gather found past kEdgeRenewShare
-// of their slack made anew where they were then (Workspace::EdgeDue), the furthest gone first:
-// none on a tick with another pass or a release. A memo made so is the one that gather would have
+// of their slack made anew where they were then (Workspace::EdgeDue), those past kEdgeRenewUrgent
+// first: none on a tick with another pass or a release. A memo made so is the one that gather would have
 // made at that call, so no answer changes; it only runs out later, apart from the others made
 // with it.
 void tend_edge_memos(const Model& model, Workspace& w, Load load) {
@@ -3682,6 +3682,7 @@ StepResult step(const Model& model, State& state, const Pose& haptic_in) {
     w.quiet_triangles = 0;
     w.edge_queries = 0;
     w.edge_memos_ahead = 0;
+    w.edge_due_count = 0;  // only this tick's gathers say which memos are due
     w.face_searches = 0;
     w.quiet_featured = 0;
 
