@@ -376,6 +376,15 @@ struct Workspace {
         double far = 0.0;                  // the edge's `far` at the query
         int count = 0;
         uint16_t hits[kEdgeMemoHits];
+        // Holds the `n` hits at `from` (at most kEdgeMemoHits), found with the edge's ends at l0,
+        // l1 and its `far` (edge_memo_within).
+        void hold(const Vec3& l0, const Vec3& l1, double far_m, const uint16_t* from, int n) {
+            at[0] = l0;
+            at[1] = l1;
+            far = far_m;
+            count = n;
+            std::copy(from, from + n, hits);
+        }
     };
     static constexpr int kEdgeMemoBits = 12;
     EdgeHitMemo edge_memo[1 << kEdgeMemoBits];
@@ -383,6 +392,7 @@ struct Workspace {
     // slack, with what a query at that call would take (the edge's ends in the piece's frame and
     // its `far`): tend_edge_memos makes some of them anew at the tick's end, ahead of need.
     struct EdgeDue {
+        EdgeHitMemo* memo;  // holds `key` still unless a later edge of that call took its slot
         uint64_t key;
         Vec3 at[2];
         double far;
@@ -397,6 +407,9 @@ struct Workspace {
     static constexpr double kEdgeMemoRoom = 1e-4;
     // How far past `far` (m) an edge memo's hits reach: `far`, at most kEdgeMemoRoom.
     static double edge_memo_room(double far) { return std::min(far, kEdgeMemoRoom); }
+    // How far from an edge of `far` a memo's hits are taken: its room over, and a nanometre for
+    // the rounding of the frames.
+    static double edge_memo_within(double far) { return far + edge_memo_room(far) + 1e-9; }
     // The triangles of a compliant object near a piece, kept between ticks (with the near
     // cache): the slots (Bvh::query_slots) whose boxes overlap `box`, the piece's query box of
     // some tick widened by kCompliantRoom. While a later query box lies inside it, that query's
@@ -935,32 +948,23 @@ void tend_edge_memos(const Model& model, Workspace& w, Load load) {
     if (load == Load::Passes || w.edge_due_count == 0 || !model.settings.edge_memos_ahead) return;
     const bool heavy = load == Load::Heavy;
     int budget = heavy ? kEdgeRenewPerHeavyTick : kEdgeRenewPerTick;
-    for (int round = 0; round < 2 && budget > 0; ++round) {
-        const double least = round == 0 ? kEdgeRenewUrgent : heavy ? 2.0 : kEdgeRenewShare;
+    // Those past kEdgeRenewUrgent, then (not on a heavy tick) the rest.
+    for (int round = 0; round < (heavy ? 1 : 2) && budget > 0; ++round) {
+        const double least = round == 0 ? kEdgeRenewUrgent : kEdgeRenewShare;
         for (int i = 0; i < w.edge_due_count && budget > 0; ++i) {
             Workspace::EdgeDue& d = w.edge_due[i];
             if (!(d.share >= least)) continue;
             d.share = -1.0;
             --budget;
-            const uint32_t slot = hash_slot(d.key, Workspace::kEdgeMemoBits);
-            Workspace::EdgeHitMemo* memo = nullptr;
-            for (Workspace::EdgeHitMemo* m : {&w.edge_memo[slot], &w.edge_memo[slot ^ 1u]})
-                if (m->key == d.key && m->owner == w.owner) memo = m;
-            if (!memo) continue;
+            if (d.memo->key != d.key) continue;
             const ToolPiece& piece = model.tool.pieces[feature_piece(d.key - 1)];
             ++w.edge_queries;
             ++w.edge_memos_ahead;
             const int hits = edge_hits_within(model.tool, piece, d.at[0], d.at[1],
-                                              d.far + Workspace::edge_memo_room(d.far) + 1e-9, w.edge_hits);
-            if (hits > Workspace::kEdgeMemoHits) continue;
-            memo->at[0] = d.at[0];
-            memo->at[1] = d.at[1];
-            memo->far = d.far;
-            memo->count = hits;
-            std::copy(w.edge_hits, w.edge_hits + hits, memo->hits);
+                                              Workspace::edge_memo_within(d.far), w.edge_hits);
+            if (hits <= Workspace::kEdgeMemoHits) d.memo->hold(d.at[0], d.at[1], d.far, w.edge_hits, hits);
         }
     }
-    w.edge_due_count = 0;
 }
 
 // The triangles of `obj` whose boxes meet box `b`, for piece `pk` (a compliant object's, or any
@@ -2296,22 +2300,18 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             const double moved2 = std::max(glm::dot(m0, m0), glm::dot(m1, m1));
             if (moved2 > kEdgeRenewShare * kEdgeRenewShare * slack * slack && w.edge_due_count < Workspace::kEdgeDue)
                 w.edge_due[w.edge_due_count++] =
-                    Workspace::EdgeDue{memo_key, {l0, l1}, far, slack > 0.0 ? std::sqrt(moved2) / slack : 1.0};
+                    Workspace::EdgeDue{memo, memo_key, {l0, l1}, far, slack > 0.0 ? std::sqrt(moved2) / slack : 1.0};
         } else {
             ++w.edge_queries;
-            const double room = memo_on ? Workspace::edge_memo_room(far) : 0.0;
-            hits = edge_hits_within(tool, piece, l0, l1, far + room + 1e-9, w.edge_hits);
+            hits = edge_hits_within(tool, piece, l0, l1, memo_on ? Workspace::edge_memo_within(far) : far + 1e-9,
+                                    w.edge_hits);
             if (memo_on && hits <= Workspace::kEdgeMemoHits) {
                 // Its own slot again, else the one used longer ago.
                 if (!memo) memo = last_use(*pair[0], w.owner) <= last_use(*pair[1], w.owner) ? pair[0] : pair[1];
                 memo->key = memo_key;
                 memo->owner = w.owner;
                 memo->used = w.gather_clock;
-                memo->at[0] = l0;
-                memo->at[1] = l1;
-                memo->far = far;
-                memo->count = hits;
-                std::copy(w.edge_hits, w.edge_hits + hits, memo->hits);
+                memo->hold(l0, l1, far, w.edge_hits, hits);
             }
         }
         // Only a pair whose closest points lie inside both edges makes an atom, and most do not.
