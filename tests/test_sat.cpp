@@ -321,10 +321,36 @@ TEST(SeparatingAxis, GapAlongAnAxisByDescentIsTheScans) {
         Vec3 a, b, d;
         triangle_near_vertex(pt, rng, u, scale, a, b, d);
         const int before = extremes[0];
-        EXPECT_EQ(gap_along_axis(view, axis, a, b, d, extremes), gap_along_axis(view, axis, a, b, d)) << "trial " << t;
+        EXPECT_EQ(gap_along_axis_by_descent(view, axis, a, b, d, extremes), gap_along_axis(view, axis, a, b, d))
+            << "trial " << t;
         moved += extremes[0] != before;
     }
     EXPECT_GT(moved, 300);  // the starts were not already the answers
+}
+
+// A piece of at most kScanVertices vertices (the probe's tip, of 50): the gap along an axis with
+// the extremes at hand is every vertex's, four at a time, the same to the bit as one at a time,
+// and the extremes are left as they were (no descent moved them).
+TEST(SeparatingAxis, GapAlongAnAxisOfASmallPieceLooksAtEveryVertex) {
+    PlacedTool pt(make_probe_tip_collision(ProbeKind::Williams));
+    ASSERT_TRUE(pt.mb.model) << pt.mb.error;
+    ASSERT_TRUE(pt.tool->pieces[0].descend);
+    const double scale = 1e-3;
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    for (int t = 0; t < 400; ++t) {
+        if (t % 50 == 0) pt.place(glm::normalize(Quat(u(rng), u(rng), u(rng), u(rng))), Vec3(u(rng), u(rng), u(rng)) * scale);
+        const ConvexView view = pt.view(true);
+        ASSERT_NE(view.neighbours, nullptr);
+        ASSERT_LE(view.vertex_count, kScanVertices);
+        const Vec3 axis = glm::normalize(Vec3(u(rng), u(rng), u(rng)));
+        Vec3 a, b, d;
+        triangle_near_vertex(pt, rng, u, scale, a, b, d);
+        int extremes[2] = {0, 0};
+        EXPECT_EQ(gap_along_axis(view, axis, a, b, d, extremes), gap_along_axis(view, axis, a, b, d)) << "trial " << t;
+        EXPECT_EQ(extremes[0], 0) << "trial " << t;
+        EXPECT_EQ(extremes[1], 0) << "trial " << t;
+    }
 }
 
 // A triangle vertex deeper inside the polytope than -floor puts their separation below floor.

@@ -404,12 +404,19 @@ SatResult separate_convex_triangle_until(const ConvexView& poly, const Vec3& a, 
 // The gap between the polytope and triangle (a, b, c) along unit axis n, the larger of its two
 // orientations (< 0: overlap along n). No more than their separation where they overlap (the
 // least overlap over all axes), nor than their distance where they are apart.
-// With `extremes` and a polytope certified for descent (ConvexView::neighbours), its least and
-// greatest vertices along n are found by descending from extremes[0] and extremes[1] (vertex
-// indices; out of range: by looking at every vertex), which receive them: the same gap, from a
-// few vertices where the axis changes little from one call to the next.
+// With `extremes` and a polytope certified for descent (ConvexView::neighbours): of one of at most
+// kScanVertices vertices, every vertex four at a time (extremes untouched); of a larger one,
+// gap_along_axis_by_descent. The same gap either way.
 double gap_along_axis(const ConvexView& poly, const Vec3& n, const Vec3& a, const Vec3& b, const Vec3& c,
                       int* extremes = nullptr);
+// gap_along_axis with the polytope's least and greatest vertices along n found by descending from
+// extremes[0] and extremes[1] (vertex indices; out of range: by looking at every vertex), which
+// receive them: the same gap, from a few vertices where the axis changes little from one call to
+// the next. Needs a polytope certified for descent.
+double gap_along_axis_by_descent(const ConvexView& poly, const Vec3& n, const Vec3& a, const Vec3& b, const Vec3& c,
+                                 int* extremes);
+// The most vertices of a polytope whose extent gap_along_axis takes by looking at every vertex.
+inline constexpr int kScanVertices = 64;
 // Whether a vertex of triangle (a, b, c) lies below `floor` (< 0) over every face plane of the
 // polytope, i.e. inside it deeper than -floor. The ball of that radius round the vertex is then
 // inside the polytope, so along every axis the two overlap by more: their separation is below
