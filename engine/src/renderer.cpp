@@ -1925,8 +1925,6 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         if (beyond && faces_beyond) continue;
         const ModelObject& obj = model.objects[nt.object];
         const auto& t = obj.mesh.triangles[nt.tri];
-        const Vec3 &p0 = obj.mesh.vertices[t[0]], &p1 = obj.mesh.vertices[t[1]], &p2 = obj.mesh.vertices[t[2]];
-        const Vec3& n = obj.topology.triangle_normals[nt.tri];
         // Only convex object vertices (and mixed ones) and convex edges meet the tool's faces
         // and edges (F-V and E-E below).
         const unsigned corners = obj.topology.triangle_corners[nt.tri];
@@ -2010,6 +2008,10 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
             // say so (an empty run: the loop looks at nothing).
             run_lo = piece.axial_run_empty(run_bottom, run_top) ? run_end : piece.axial_run_start(coords, run_bottom);
         }
+        // The triangle as values, read once: held by reference they were loaded again at every
+        // vertex, as a record the loop writes might have changed them for all the compiler knew.
+        const Vec3 p0 = obj.mesh.vertices[t[0]], p1 = obj.mesh.vertices[t[1]], p2 = obj.mesh.vertices[t[2]];
+        const Vec3 n = obj.topology.triangle_normals[nt.tri];
         for (int r = run_lo; by_mask ? candidates != 0 : r < run_end && coords[r] <= run_top; ++r) {
             if (by_mask) {
                 r = __builtin_ctzll(candidates);
