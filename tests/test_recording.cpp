@@ -20,6 +20,7 @@
 #include <thread>
 
 #include <csignal>
+#include <poll.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -315,12 +316,21 @@ void crash_test(bool writer_thread, SyncPolicy sync) {
         ::_exit(6);  // not reached within the test's time: the parent kills first
     }
     ::close(fds[1]);
-    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    // Killed once it has recorded a while, 0.2 s of ticks (some 300 ms after the fork; a slow
+    // start, such as a first sync that the file system takes long over, only puts it off), or
+    // after 30 s without.
+    double last_reported = -1.0, t = 0.0;
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (last_reported < 0.2 && std::chrono::steady_clock::now() < give_up) {
+        pollfd ready{fds[0], POLLIN, 0};
+        if (::poll(&ready, 1, 100) <= 0) continue;
+        if (::read(fds[0], &t, sizeof t) != sizeof t) break;  // the child has gone: its status says why
+        last_reported = t;
+    }
     ASSERT_EQ(::kill(child, SIGKILL), 0);
     int status = 0;
     ASSERT_EQ(::waitpid(child, &status, 0), child);
     ASSERT_TRUE(WIFSIGNALED(status)) << "child exited early with status " << WEXITSTATUS(status);
-    double last_reported = -1.0, t = 0.0;
     while (::read(fds[0], &t, sizeof t) == sizeof t) last_reported = t;
     ::close(fds[0]);
     ASSERT_GE(last_reported, 0.1) << "the child recorded too few ticks to test anything";
