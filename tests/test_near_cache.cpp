@@ -345,8 +345,10 @@ TEST(NearCache, EdgeMemosMadeAheadChangeNoAnswerAndSpreadTheirMaking) {
 // of the piece's vertices finds none within its bounds, tick after tick. Each set's slot keeps how
 // long its triangle stays so (Workspace::CompliantSet::quiet), and gather passes over it until
 // then: some 350 of the ~400 such triangles a contact tick of the session. Looked at all the same
-// (RendererSettings::audit_quiet_triangles), none of them has a vertex within the bounds: the step
-// finds the features it would find without the cache, which passes over nothing.
+// (RendererSettings::audit_quiet_triangles), none of them has a vertex within the bounds (a vertex
+// whose feature there gather leaves out, leaves_out_far_plane, is clear of them by how far it is
+// from one it keeps): the step finds the features it would find without the cache, which passes
+// over nothing.
 TEST(NearCache, QuietTissueTrianglesArePassedOverAndGiveNoFeature) {
     const cli::BenchScene b = load("quadrant_two_regions");
     ASSERT_FALSE(b.ticks.empty());

@@ -28,6 +28,24 @@ struct TriClosest {
 // Closest point of triangle (a, b, c) to p, with the feature it lies on.
 TriClosest closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
 
+// How far point `foot`, on the plane of triangle t (unit normal n), is from every point of that
+// plane whose closest point on the triangle lies on edge k (t[k] to t[k + 1], TriRegion::Edge0 +
+// k): the strip beyond the edge between the lines across it through its ends. 0 for a triangle
+// with no area.
+inline double distance_to_edge_region(const Vec3 t[3], const Vec3& n, const Vec3& foot, int k) {
+    const Vec3& a = t[k];
+    const Vec3 ab = t[(k + 1) % 3] - a;
+    Vec3 out = glm::cross(ab, n);  // across the edge, away from the third corner
+    if (glm::dot(out, t[(k + 2) % 3] - a) > 0.0) out = -out;
+    const double length = std::sqrt(glm::dot(ab, ab)), width = std::sqrt(glm::dot(out, out));
+    if (!(length > 0.0) || !(width > 0.0)) return 0.0;
+    const Vec3 f = foot - a;
+    const double along = glm::dot(f, ab) / length, over = glm::dot(f, out) / width;
+    const double before = along < 0.0 ? -along : along > length ? along - length : 0.0;
+    const double inside = over < 0.0 ? -over : 0.0;
+    return std::sqrt(before * before + inside * inside);
+}
+
 // Whether sqrt(x) > f, as the rounded root compares, for f > 0: decided without the root where x
 // is further than a part in 2^50 from f squared (there the root is more than half an ulp of f
 // from f, and no rounding turns the answer), by the root itself only within that band. A NaN x

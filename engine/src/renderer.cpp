@@ -105,6 +105,10 @@ constexpr double kRemeasureMotion = 3e-5;
 // How far past the tests' bounds gather_atoms looks for a piece's vertices when it measures how
 // long a triangle stays clear of them (m; Workspace::CompliantSet::quiet).
 constexpr double kQuietHorizon = 5e-5;
+// A triangle of a compliant set with no feature whose nearest vertex is this close to the bounds
+// (m) is listed (Workspace::CompliantSet::listed), not passed over until the drift reaches it:
+// the listed vertices are cheaper to look at each tick than the whole search so soon again.
+constexpr double kListedClearance = 0.1 * kQuietHorizon;
 constexpr int kMaxAtoms = 1024;
 // Triangles the guard finds the atoms let the tool into, taken in one round: all of them as a
 // rule (deep in the tissue some sixty at once), so that the candidate is solved again once.
@@ -1824,6 +1828,17 @@ void order_by_feature(Workspace& w, int first, bool alts) {
     }
 }
 
+// The flat edges of triangle `tri` of `obj` (bit k: edge k, triangle_edges' order), kept in
+// `known` (-1: not yet asked).
+int flat_edges_of(const ModelObject& obj, uint32_t tri, int& known) {
+    if (known < 0) {
+        known = 0;
+        for (int k = 0; k < 3; ++k)
+            known |= int(obj.topology.edges[obj.topology.triangle_edges[tri][k]].convexity == Convexity::Flat) << k;
+    }
+    return known;
+}
+
 // gather: the principal-contact atoms of every feature pair within `reach`. The tool may be inside
 // a compliant object by as deep as it is at the base (Workspace::soft) plus the reach: that
 // object's features stay in play that far behind their surface. False when a tool vertex's
@@ -1989,6 +2004,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
         // The triangle's edges from p0, taken once a vertex first needs the closest point.
         Vec3 e01, e02;
         bool edges_known = false;
+        int flat_edges = -1;  // the triangle's flat edges, once asked (flat_edges_of)
         if (listed_only) {
             candidates = listed;
         } else if (by_mask) {
@@ -2050,6 +2066,34 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                 }
                 continue;
             }
+            const FeatureKey key = feature_key(obj, nt.object, nt.tri, uint32_t(a), c.region);
+            // An edge or vertex feature of a compliant object is used only by a vertex outside it
+            // (behind none of the faces over it), and left out there when it gives no atom that
+            // can hold (leaves_out_far_plane): passed over at once. Such a vertex gives nothing
+            // until it comes within far_plane of the triangle, over its face or over one of its
+            // flat edges (those are not left out at any distance): it is as clear of the bounds
+            // as the least of those ways (far_plane rises with the reach, which the set's drift
+            // counts). A triangle whose vertices are all so clear is quiet as one they all miss.
+            if (obj.compliant && key.type != 0 &&
+                leaves_out_far_plane(model, key, w.tool_world[a], c.distance, far_plane)) {
+                if (measure) {
+                    const Vec3 foot = w.tool_world[a] - plane * n;  // on the triangle's plane
+                    const Vec3 across = foot - c.point;
+                    double out = std::min(c.distance - far_plane, std::sqrt(glm::dot(across, across)));
+                    if (const int flat = flat_edges_of(obj, nt.tri, flat_edges)) {
+                        const Vec3 corners[3] = {p0, p1, p2};
+                        for (int k = 0; k < 3; ++k)
+                            if (flat >> k & 1) out = std::min(out, distance_to_edge_region(corners, n, foot, k));
+                    }
+                    out -= 1e-12;  // for the rounding of the sums
+                    clear = std::min(clear, out);
+                    near_bits |= uint64_t(out < horizon) << (r & 63);
+                } else {
+                    featured = true;
+                    near_bits |= uint64_t(1) << (r & 63);
+                }
+                continue;
+            }
             featured = true;
             near_bits |= uint64_t(1) << (r & 63);
             if (auditing && !(r < 64 && (listed >> r & 1u))) {
@@ -2059,13 +2103,7 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                 if (listed == 0) break;
                 continue;
             }
-            const FeatureKey key = feature_key(obj, nt.object, nt.tri, uint32_t(a), c.region);
             if (obj.compliant) {
-                // An edge or vertex feature of a compliant object is used only by a vertex outside
-                // it (behind none of the faces over it), and left out there when it gives no atom
-                // that can hold (leaves_out_far_plane): passed over at once.
-                if (key.type != 0 && leaves_out_far_plane(model, key, w.tool_world[a], c.distance, far_plane))
-                    continue;
                 // Sorted out below: the tool may be inside a compliant object.
                 if (w.inside_count < kMaxFeatures)
                     w.inside[w.inside_count++] =
@@ -2078,7 +2116,9 @@ bool gather_atoms(const Model& model, const Pose& base, const double lower[6], c
                 w.gather_full = true;
             }
         }
-        if (set && featured && measure && piece.vertex_count <= 64) {
+        // A triangle with no feature but a vertex nearer the bounds than kListedClearance is
+        // listed as one with a feature: it would be measured again within a few ticks.
+        if (set && (featured || clear < kListedClearance) && measure && piece.vertex_count <= 64) {
             // Every vertex not listed is at least the horizon clear of the bounds.
             set->quiet[slot] = set->drift + horizon - 1e-12;
             set->listed[slot] = near_bits;
