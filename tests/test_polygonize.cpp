@@ -1,9 +1,11 @@
 // The implicit-to-mesh path: closed manifold output, vertices on the zero set, topology kept,
 // decimation within its error bound.
 #include "sulcus/content/polygonize.h"
+#include "decimate_detail.h"
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <set>
 #include <stdexcept>
@@ -105,6 +107,35 @@ TEST(Decimate, StopsAtTheTargetCount) {
     ASSERT_EQ(validate_mesh(coarse), "");
     EXPECT_LE(coarse.triangles.size(), 2002u);
     EXPECT_EQ(euler_characteristic(coarse), 0);
+}
+
+// The decimater answers its topology check and halfedge lookup itself (the packaged library's own check is slowed by
+// its asserts); the two must agree on every halfedge: on a closed mesh, on one with holes (boundary
+// edges and vertices), on a tetrahedron (whose one-rings share all but the edge's own ends), and after
+// collapses have left deleted edges and vertices behind.
+TEST(Decimate, TopologyCheckAgreesWithOpenMeshOnEveryHalfedge) {
+    const TriMesh torus_mesh = polygonize([&](const Vec3& p) { return torus(p, 3e-3, 1e-3); },
+                                          Aabb{Vec3(-5e-3), Vec3(5e-3)}, PolygonizeSettings{5e-4, 24});
+    TriMesh holed = torus_mesh;
+    // Holes: drop every 40th triangle, and a run of neighbours so that some holes are large.
+    std::vector<std::array<uint32_t, 3>> kept;
+    for (size_t i = 0; i < holed.triangles.size(); ++i)
+        if (i % 40 != 0 && (i < 100 || i > 130)) kept.push_back(holed.triangles[i]);
+    holed.triangles = kept;
+    TriMesh tetra;
+    tetra.vertices = {Vec3(0.0), Vec3(1e-3, 0.0, 0.0), Vec3(0.0, 1e-3, 0.0), Vec3(0.0, 0.0, 1e-3)};
+    tetra.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+
+    for (const TriMesh* m : std::array<const TriMesh*, 3>{&torus_mesh, &holed, &tetra}) {
+        const auto c = decimate_detail::compare_collapse_checks(*m, 60);
+        EXPECT_EQ(c.disagreed, 0u);
+        EXPECT_GT(c.compared, 0u);
+        // Both answers occur, so the comparison is not of a constant.
+        EXPECT_GT(c.allowed, 0u);
+        EXPECT_LT(c.allowed, c.compared);
+        EXPECT_GT(c.found, 0u);
+        EXPECT_LT(c.found, c.found_compared);
+    }
 }
 
 TEST(SmoothMinMax, MatchPlainMinMaxAwayFromTheSeam) {
