@@ -219,7 +219,11 @@ SatResult separate_convex_triangle_until(const ConvexView& poly, const Vec3& a, 
     // half great circle of normals perpendicular to it on its outer side; the polytope's edge to the
     // arc between its two face normals. Tested in the polytope's frame.
     Vec3 e_local[3], out_local[3];
+    // The polytope's turn as a matrix, for turning each crossing pair's normal x into the world
+    // (a third of the quaternion's operations).
+    Mat3 turn(1.0);
     if (fast && tl > 0.0) {
+        turn = glm::mat3_cast(*poly.rotation);
         const Quat inv = glm::conjugate(*poly.rotation);
         for (int k = 0; k < 3; ++k) {
             e_local[k] = inv * te[k];
@@ -239,7 +243,7 @@ SatResult separate_convex_triangle_until(const ConvexView& poly, const Vec3& a, 
             // A face of the Minkowski difference: along its normal (x, in the edge's normal
             // cone) the polytope reaches farthest at this edge, so its extent is one dot.
             Vec3 n = u / ul;
-            if (glm::dot(n, *poly.rotation * x) < 0.0) n = -n;
+            if (glm::dot(n, turn * x) < 0.0) n = -n;
             const double pmax = glm::dot(n, poly.vertices[poly.edges[e][0]]);
             const double tmin = std::min(glm::dot(n, a), std::min(glm::dot(n, b), glm::dot(n, c)));
             keep(tmin - pmax, -1.0, n, 2, k * poly.edge_count + e);
