@@ -41,24 +41,17 @@ public:
         const OpenMesh::VertexHandle v1 = to_vertex_handle(v0v1);
         if (status(v0).deleted() || status(v1).deleted()) return false;
 
-        // The far vertex of each side's triangle; the side's two other edges may not both be on
-        // the boundary.
+        // The far vertex of the triangle on halfedge h's side (none on the boundary); false where
+        // that triangle's two other edges are both on the boundary.
+        auto far_vertex = [&](OpenMesh::HalfedgeHandle h, OpenMesh::VertexHandle& far) {
+            if (is_boundary(h)) return true;
+            const OpenMesh::HalfedgeHandle h1 = next_halfedge_handle(h);
+            const OpenMesh::HalfedgeHandle h2 = next_halfedge_handle(h1);
+            far = to_vertex_handle(h1);
+            return !(is_boundary(opposite_halfedge_handle(h1)) && is_boundary(opposite_halfedge_handle(h2)));
+        };
         OpenMesh::VertexHandle vl, vr;
-        if (!is_boundary(v0v1)) {
-            const OpenMesh::HalfedgeHandle h1 = next_halfedge_handle(v0v1);
-            const OpenMesh::HalfedgeHandle h2 = next_halfedge_handle(h1);
-            vl = to_vertex_handle(h1);
-            if (is_boundary(opposite_halfedge_handle(h1)) && is_boundary(opposite_halfedge_handle(h2)))
-                return false;
-        }
-        if (!is_boundary(v1v0)) {
-            const OpenMesh::HalfedgeHandle h1 = next_halfedge_handle(v1v0);
-            const OpenMesh::HalfedgeHandle h2 = next_halfedge_handle(h1);
-            vr = to_vertex_handle(h1);
-            if (is_boundary(opposite_halfedge_handle(h1)) && is_boundary(opposite_halfedge_handle(h2)))
-                return false;
-        }
-        if (vl == vr) return false;
+        if (!far_vertex(v0v1, vl) || !far_vertex(v1v0, vr) || vl == vr) return false;
 
         // The two one-rings may share only vl and vr (tag bits, as the library does).
         for (auto it = vv_iter(v0); it.is_valid(); ++it) status(*it).set_tagged(false);
