@@ -155,6 +155,50 @@ TEST(ToolPieces, TheSlabsAcrossTheAxisHoldEveryVertexABallHolds) {
     EXPECT_GT(left_out, balls);
 }
 
+// The lanes of edge boxes the edge query reads (ToolPiece::edge_boxes, edge_block_boxes): each
+// edge's box, exactly its two ends' bounds, in lane e % 4 of block e / 4; each block's box in
+// its group's lane holds its edges' boxes; every lane past the last edge or block is empty, so it
+// meets no query. The query finds an edge exactly where its own box meets the query box, which
+// these make so.
+TEST(ToolPieces, EdgeBoxLanesHoldEachEdgeInItsBlockAndNothingElse) {
+    std::vector<TriMesh> tools = {bent_probe()};
+    for (ProbeKind kind : kAllProbeKinds) tools.push_back(make_probe_tip_collision(kind));
+    int edges = 0;
+    for (const TriMesh& mesh : tools) {
+        const ModelBuild b = build_model(mesh, {}, RendererSettings{});
+        ASSERT_TRUE(b.model) << b.error;
+        const ModelTool& tool = b.model->tool;
+        for (const ToolPiece& p : tool.pieces) {
+            const uint32_t blocks = (p.edge_count + 3) / 4;
+            ASSERT_EQ(p.edge_boxes.size(), blocks);
+            ASSERT_EQ(p.edge_block_boxes.size(), (blocks + 3) / 4);
+            for (uint32_t e = 0; e < 4 * blocks; ++e) {
+                const ToolPiece::BoxLanes& lanes = p.edge_boxes[e / 4];
+                const ToolPiece::BoxLanes& group = p.edge_block_boxes[e / 16];
+                const int lane = int(e % 4), block_lane = int(e / 4 % 4);
+                if (e >= p.edge_count) {
+                    for (int d = 0; d < 3; ++d) EXPECT_GT(lanes.lo[d][lane], lanes.hi[d][lane]) << "lane past the end";
+                    continue;
+                }
+                ++edges;
+                const Vec3& a = tool.mesh.vertices[tool.edges[p.edge_begin + e][0]];
+                const Vec3& c = tool.mesh.vertices[tool.edges[p.edge_begin + e][1]];
+                for (int d = 0; d < 3; ++d) {
+                    EXPECT_EQ(lanes.lo[d][lane], std::min(a[d], c[d])) << "edge " << e;
+                    EXPECT_EQ(lanes.hi[d][lane], std::max(a[d], c[d])) << "edge " << e;
+                    EXPECT_LE(group.lo[d][block_lane], lanes.lo[d][lane]) << "edge " << e;
+                    EXPECT_GE(group.hi[d][block_lane], lanes.hi[d][lane]) << "edge " << e;
+                }
+            }
+            for (uint32_t k = blocks; k < 4 * uint32_t(p.edge_block_boxes.size()); ++k)
+                for (int d = 0; d < 3; ++d)
+                    EXPECT_GT(p.edge_block_boxes[k / 4].lo[d][k % 4], p.edge_block_boxes[k / 4].hi[d][k % 4])
+                        << "block past the end";
+        }
+    }
+    EXPECT_GT(edges, 100);
+}
+
 // The slabs along each piece's axis (ToolPiece::axial_first) find where an axial run starts as
 // std::lower_bound does, for coordinates at, just beside and between the vertices', past both
 // ends, and NaN; say a run is empty only when no vertex lies in it, and say so for most runs

@@ -320,12 +320,29 @@ std::string add_piece(const TriMesh& mesh, size_t index, ModelTool& tool) {
         }
     piece.edge_count = uint32_t(tool.edges.size()) - piece.edge_begin;
     {
-        // Each edge as a flat triangle (its box is the edge's).
-        TriMesh segments;
-        segments.vertices = mesh.vertices;
-        for (uint32_t e = piece.edge_begin; e < piece.edge_begin + piece.edge_count; ++e)
-            segments.triangles.push_back({tool.piece_edges[e][0], tool.piece_edges[e][1], tool.piece_edges[e][1]});
-        piece.edge_bvh = Bvh(segments, 6);
+        // The edges' boxes, four to a block, and the blocks' boxes, four to a group.
+        auto put = [](ToolPiece::BoxLanes& lanes, int lane, const Aabb& b) {
+            for (int d = 0; d < 3; ++d) {
+                lanes.lo[d][lane] = b.lo[d];
+                lanes.hi[d][lane] = b.hi[d];
+            }
+        };
+        const uint32_t blocks = (piece.edge_count + 3) / 4, groups = (blocks + 3) / 4;
+        piece.edge_boxes.assign(blocks, ToolPiece::BoxLanes{});
+        piece.edge_block_boxes.assign(groups, ToolPiece::BoxLanes{});
+        for (uint32_t b = 0; b < 4 * groups; ++b) {
+            Aabb block;
+            for (uint32_t e = 4 * b; e < 4 * b + 4; ++e) {
+                Aabb edge;
+                if (e < piece.edge_count) {
+                    edge.grow(mesh.vertices[tool.piece_edges[piece.edge_begin + e][0]]);
+                    edge.grow(mesh.vertices[tool.piece_edges[piece.edge_begin + e][1]]);
+                    block.grow(edge);
+                }
+                if (b < blocks) put(piece.edge_boxes[b], int(e % 4), edge);
+            }
+            put(piece.edge_block_boxes[b / 4], int(b % 4), block);
+        }
     }
     Aabb box;
     for (const Vec3& v : mesh.vertices) {

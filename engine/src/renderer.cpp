@@ -797,15 +797,42 @@ int edge_hits_within(const ModelTool& tool, const ToolPiece& piece, const Vec3& 
     box.grow(l1);
     box.inflate(within);
     int hits = 0;
-    piece.edge_bvh.query(box, [&](uint32_t e) {
+    auto exact = [&](uint32_t e) {
         const ModelTool::EdgeLine& line = tool.edge_lines[piece.edge_begin + e];
         double s_, t_;
         closest_segment_params(line.along, d_l, line.from - l0, line.length2, e_l, s_, t_);
         const Vec3 gap = (line.from + s_ * line.along) - (l0 + t_ * d_l);
         if (!root_exceeds(glm::dot(gap, gap), within)) out[hits++] = uint16_t(e);
-        return true;
-    });
-    std::sort(out, out + hits);
+    };
+    // The lanes whose boxes meet the query box (Aabb::overlaps), as bits.
+#if defined(__AVX2__)
+    const __m256d qlo[3] = {lanes_of(box.lo.x), lanes_of(box.lo.y), lanes_of(box.lo.z)};
+    const __m256d qhi[3] = {lanes_of(box.hi.x), lanes_of(box.hi.y), lanes_of(box.hi.z)};
+    auto meets = [&](const ToolPiece::BoxLanes& b) {
+        __m256d all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+        for (int d = 0; d < 3; ++d) {
+            all = _mm256_and_pd(all, _mm256_cmp_pd(_mm256_loadu_pd(b.lo[d]), qhi[d], _CMP_LE_OQ));
+            all = _mm256_and_pd(all, _mm256_cmp_pd(qlo[d], _mm256_loadu_pd(b.hi[d]), _CMP_LE_OQ));
+        }
+        return unsigned(_mm256_movemask_pd(all));
+    };
+#else
+    auto meets = [&](const ToolPiece::BoxLanes& b) {
+        unsigned bits = 0;
+        for (int k = 0; k < 4; ++k) {
+            bool in = true;
+            for (int d = 0; d < 3; ++d) in = in && b.lo[d][k] <= box.hi[d] && box.lo[d] <= b.hi[d][k];
+            bits |= unsigned(in) << k;
+        }
+        return bits;
+    };
+#endif
+    for (size_t g = 0; g < piece.edge_block_boxes.size(); ++g)
+        for (unsigned blocks = meets(piece.edge_block_boxes[g]); blocks != 0; blocks &= blocks - 1) {
+            const uint32_t b = uint32_t(4 * g) + uint32_t(__builtin_ctz(blocks));
+            for (unsigned edges = meets(piece.edge_boxes[b]); edges != 0; edges &= edges - 1)
+                exact(4 * b + uint32_t(__builtin_ctz(edges)));
+        }
     return hits;
 }
 

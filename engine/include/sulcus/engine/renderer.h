@@ -201,9 +201,18 @@ struct ToolPiece {
     // times spread_m.
     Vec3 centre{0.0};
     double spread_m = 0.0;
-    // The piece's edges (ModelTool::edges from edge_begin) in a hierarchy of boxes, tool frame:
-    // finds the few tool edges near an object edge without looking at every one.
-    Bvh edge_bvh;
+    // The boxes of the piece's edges (ModelTool::edges from edge_begin; tool frame) as lanes of
+    // four: edge_boxes[b] holds those of the edges 4b to 4b + 3 of the piece, and
+    // edge_block_boxes[g] the boxes of the four blocks 4g to 4g + 3 (each its edges' box). A lane
+    // past the last edge or block holds an empty box. A query looks at a group's four block boxes
+    // at once, then at the edges' boxes of each block that meets it: it finds the few tool edges
+    // near an object edge without looking at every one, and in their order.
+    struct BoxLanes {
+        double lo[3][4];
+        double hi[3][4];
+    };
+    std::vector<BoxLanes> edge_boxes;
+    std::vector<BoxLanes> edge_block_boxes;
     // The piece's principal axis (unit, tool frame; the capsules lie along it). Its vertices in
     // order along it are ModelTool::axial_vertices[vertex_begin, + vertex_count), at
     // axial_coords (m): a ball around a point holds only the vertices of one run of them.
