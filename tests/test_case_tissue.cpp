@@ -4,6 +4,7 @@
 // for all of them (some 30 s), so these tests run in one process (tests/CMakeLists.txt).
 #include "case_charts.h"
 #include "case_geometry.h"
+#include "mesh_checks.h"
 #include "probing_check.h"
 
 #include "sulcus/content/case.h"
@@ -28,6 +29,7 @@ namespace {
 
 using test::quick_settings;
 using test::uniform_chart;
+using test::winding_number;
 
 // Depth below `from` along -axis at which the line first meets the mesh (ray cast), or -1.
 double first_hit_below(const TriMesh& m, const Vec3& from, const Vec3& axis) {
@@ -144,19 +146,6 @@ TEST(CaseTissue, TrajectoryPushesUntilTheForceWouldReachHalfANewton) {
             if (t >= p.t_start && t <= p.t_end) deepest = std::max(deepest, glm::dot(f.floor_point - pose.position, f.axis));
         EXPECT_NEAR(deepest, expected, 1e-9) << p.fdi << site_name(p.site);
     }
-}
-
-// Generalized winding number (solid angles): about 1 inside a closed outward mesh, 0 outside.
-double winding_number(const TriMesh& m, const Vec3& p) {
-    double sum = 0;
-    for (const auto& t : m.triangles) {
-        const Vec3 a = m.vertices[t[0]] - p, b = m.vertices[t[1]] - p, c = m.vertices[t[2]] - p;
-        const double la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
-        const double num = glm::dot(a, glm::cross(b, c));
-        const double den = la * lb * lc + glm::dot(a, b) * lc + glm::dot(a, c) * lb + glm::dot(b, c) * la;
-        sum += 2.0 * std::atan2(num, den);
-    }
-    return sum / (4.0 * 3.14159265358979323846);
 }
 
 

@@ -1,4 +1,6 @@
 // Periodontal probes: marking tables, the convex collision tip and the drawn body.
+#include "mesh_checks.h"
+
 #include "sulcus/content/probes.h"
 
 #include "sulcus/engine/mesh.h"
@@ -16,6 +18,8 @@
 
 namespace sulcus {
 namespace {
+
+using test::winding_number;
 
 constexpr double kMm = 1e-3;
 constexpr double kUm = 1e-6;
@@ -48,19 +52,6 @@ double distance_to_surface(const TriMesh& m, const Vec3& p) {
     for (const auto& t : m.triangles)
         best = std::min(best, glm::length(p - closest_on_triangle(p, m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]])));
     return best;
-}
-
-// Generalized winding number (solid angles): about 1 inside a closed outward mesh, 0 outside.
-double winding_number(const TriMesh& m, const Vec3& p) {
-    double sum = 0;
-    for (const auto& t : m.triangles) {
-        const Vec3 a = m.vertices[t[0]] - p, b = m.vertices[t[1]] - p, c = m.vertices[t[2]] - p;
-        const double la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
-        const double num = glm::dot(a, glm::cross(b, c));
-        const double den = la * lb * lc + glm::dot(a, b) * lc + glm::dot(a, c) * lb + glm::dot(b, c) * la;
-        sum += 2.0 * std::atan2(num, den);
-    }
-    return sum / (4.0 * std::numbers::pi);
 }
 
 // How far p lies outside the closed mesh (0 when inside).
